@@ -1,0 +1,32 @@
+# citysim: every target creates .venv on first use, so a fresh clone needs only python3.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: install demo test bench lint clean
+
+install: $(STAMP)
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+# A real scenario through every controller: about 10 simulated minutes of a suburban night.
+demo: $(STAMP)
+	$(VENV)/bin/citysim run scenarios/suburban_night.yaml --out results/demo --duration 600
+
+test: $(STAMP)
+	$(PY) -m pytest
+
+# Figures, not pass/fail: detector vs OpenCV's floor, renderer, simulation speed, sweep scaling.
+bench: $(STAMP)
+	$(PY) -m experiments.bench
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check detector citysim experiments tests
+
+clean:
+	rm -rf $(VENV) results .pytest_cache
