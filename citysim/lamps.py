@@ -1,0 +1,268 @@
+"""Luminaire power model: light level ramps and exact energy integration.
+
+A lamp's visible light is a *level* in 0..1 (0 off, ``dim_level`` idle, 1
+full). A controller sets a target level; the level then moves toward it in a
+straight line, up at ``1 / ramp_up_s`` per second and down at ``1 / fade_s``
+per second (DALI fades run from 0.1 s to minutes; the paper's lamps switch up
+in 0.3 s). A zero ramp or fade time is an instant step.
+
+Power (W) at level L::
+
+    power_w = rated_power_w * L                # LED drivers are close to linear
+            + standby_power_w   (if the lamp has a controllable driver, see Lamp)
+            + sensing_power_w   (if the lamp senses: camera, board, IR emitter)
+
+Energy is integrated in closed form: between two target changes the level is
+one linear ramp then a flat stretch, whose integrals are exact, so energy does
+not depend on how often ``advance`` is called. A plain always-on lamp (level 1,
+no sensing, no controllable driver) uses exactly ``rated_power_w * duration_s``.
+
+Hold times are the controller's business, not the lamp's: ``hold_s`` is carried
+in the spec so every controller reads the same number, but a lamp never drops
+its level by itself. The controller calls ``set_target(t, dim_level)`` once the
+hold since its last detection has expired.
+
+Time: every method takes simulation seconds ``t_s``; a lamp's clock only moves
+forward (``advance``/``set_target`` with an earlier time raise ``ValueError``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from numbers import Real
+
+
+def check_number(owner: str, name: str, value: object, low: float, high: float = math.inf) -> None:
+    """Raise ValueError naming ``owner.name`` unless ``low <= value <= high`` and finite.
+
+    Shared by the energy, network and metrics modules so their errors read alike.
+    """
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value):
+        raise ValueError(f"{owner}.{name} must be a finite number, got {value!r}")
+    if not low <= value <= high:
+        valid = f">= {low}" if high == math.inf else f"in [{low}, {high}]"
+        raise ValueError(f"{owner}.{name} must be {valid}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class LuminaireSpec:
+    """One luminaire type. Powers in W, times in s, levels as fractions of full light.
+
+    Defaults: a 60 W LED street luminaire (typical 60-70 W), idling at 20 %,
+    a 0.5 W DALI driver standby, the paper's 0.3 s switch-up, a 1 s fade, a
+    30 s hold after the last detection and about 5 W for camera + board + IR
+    emitter.
+    """
+
+    rated_power_w: float = 60.0
+    dim_level: float = 0.2
+    standby_power_w: float = 0.5
+    ramp_up_s: float = 0.3
+    fade_s: float = 1.0
+    hold_s: float = 30.0
+    sensing_power_w: float = 5.0
+
+    def __post_init__(self) -> None:
+        for name in (
+            "rated_power_w",
+            "standby_power_w",
+            "sensing_power_w",
+            "ramp_up_s",
+            "fade_s",
+            "hold_s",
+        ):
+            check_number("LuminaireSpec", name, getattr(self, name), 0.0)
+        check_number("LuminaireSpec", "dim_level", self.dim_level, 0.0, 1.0)
+
+
+def always_on_energy_j(n_lamps: int, spec: LuminaireSpec, duration_s: float) -> float:
+    """Energy (J) of ``n_lamps`` plain lamps at full light for ``duration_s``: the savings baseline."""
+    if isinstance(n_lamps, bool) or not isinstance(n_lamps, int) or n_lamps < 0:
+        raise ValueError(f"n_lamps must be an int >= 0, got {n_lamps!r}")
+    check_number("always_on_energy_j", "duration_s", duration_s, 0.0)
+    return n_lamps * spec.rated_power_w * duration_s
+
+
+def _ramp(
+    level: float, target: float, spec: LuminaireSpec, dt_s: float
+) -> tuple[float, float, float]:
+    """Follow one ramp toward ``target`` for ``dt_s`` seconds.
+
+    Returns (level at the end, integral of level over the span in level*s,
+    time spent above ``spec.dim_level`` in s). The level moves linearly until
+    it reaches the target, then stays there.
+    """
+    going_up = target >= level
+    full_swing_s = spec.ramp_up_s if going_up else spec.fade_s
+    reach_s = abs(target - level) * full_swing_s  # 0 for an instant step
+    ramp_s = min(dt_s, reach_s)
+    if dt_s >= reach_s:
+        end_of_ramp = target  # exact, no rounding drift at the end of a ramp
+    else:
+        slope_per_s = (1.0 if going_up else -1.0) / full_swing_s
+        end_of_ramp = level + slope_per_s * ramp_s
+    flat_s = dt_s - ramp_s
+    integral = 0.5 * (level + end_of_ramp) * ramp_s + target * flat_s
+
+    dim = spec.dim_level
+    if level > dim and end_of_ramp > dim:
+        above_s = ramp_s
+    elif level <= dim and end_of_ramp <= dim:
+        above_s = 0.0
+    else:  # the ramp crosses the dim level once, at a known fraction of its length
+        cross_s = ramp_s * (dim - level) / (end_of_ramp - level)
+        above_s = ramp_s - cross_s if going_up else cross_s
+    if target > dim:
+        above_s += flat_s
+    return end_of_ramp, integral, above_s
+
+
+class Lamp:
+    """One luminaire: its level over time, its switching, and the energy it draws.
+
+    ``senses``: the lamp carries a camera/board/emitter and pays
+    ``sensing_power_w``. ``standby``: the lamp has a controllable (DALI) driver
+    and radio that draw ``standby_power_w`` at every level; ``None`` means "same
+    as ``senses``". A plain always-on or photocell lamp has no separate standby
+    draw (its driver losses are inside ``rated_power_w``), so the always-on
+    baseline is exactly lamps x rated power x duration.
+
+    The lamp keeps only an anchor (time, level, target) and accumulators, so
+    memory and per-call work are O(1) however long the run.
+    """
+
+    def __init__(
+        self,
+        index: int,
+        spec: LuminaireSpec,
+        senses: bool,
+        initial_level: float,
+        *,
+        standby: bool | None = None,
+        t0_s: float = 0.0,
+    ) -> None:
+        if not isinstance(spec, LuminaireSpec):
+            raise ValueError(f"Lamp.spec must be a LuminaireSpec, got {type(spec).__name__}")
+        check_number("Lamp", "initial_level", initial_level, 0.0, 1.0)
+        check_number("Lamp", "t0_s", t0_s, -math.inf)
+        self.index = index
+        self.spec = spec
+        self.senses = bool(senses)
+        self.standby = self.senses if standby is None else bool(standby)
+        self.switches = 0
+        self._anchor_t_s = float(t0_s)
+        self._anchor_level = float(initial_level)
+        self._target = float(initial_level)
+        self._clock_t_s = float(t0_s)
+        self._t0_s = float(t0_s)
+        self._closed_level_s = 0.0  # integral of level over closed segments, level*s
+        self._closed_on_s = 0.0
+
+    # ------------------------------------------------------------------ control
+    @property
+    def t_s(self) -> float:
+        """Time (s) up to which energy and on-time are integrated."""
+        return self._clock_t_s
+
+    @property
+    def target_level(self) -> float:
+        """The level the lamp is heading to (0..1), set by the last ``set_target``."""
+        return self._target
+
+    def is_ramping(self, t_s: float) -> bool:
+        """True while the level at ``t_s`` is still moving toward the target."""
+        return t_s < self.reached_at_s()
+
+    def _is_on(self, level: float) -> bool:
+        return level > self.spec.dim_level
+
+    def set_target(self, t_s: float, level: float) -> None:
+        """From ``t_s`` on, ramp toward ``level`` (0..1). Integrates up to ``t_s`` first."""
+        check_number("Lamp.set_target", "level", level, 0.0, 1.0)
+        self.advance(t_s)
+        if level == self._target:
+            return
+        now_level, integral, on_s = _ramp(
+            self._anchor_level, self._target, self.spec, t_s - self._anchor_t_s
+        )
+        self._closed_level_s += integral
+        self._closed_on_s += on_s
+        if self._is_on(level) != self._is_on(self._target):
+            self.switches += 1
+        self._anchor_t_s = float(t_s)
+        self._anchor_level = now_level
+        self._target = float(level)
+
+    def advance(self, t_s: float) -> None:
+        """Move the lamp's clock to ``t_s``: energy_j and on_time_s now cover [t0, t_s]."""
+        check_number("Lamp.advance", "t_s", t_s, -math.inf)
+        if t_s < self._clock_t_s:
+            raise ValueError(
+                f"Lamp {self.index}: t_s={t_s} precedes the lamp's clock {self._clock_t_s}; "
+                "time only moves forward"
+            )
+        self._clock_t_s = float(t_s)
+
+    # ------------------------------------------------------------------ readings
+    def level_at(self, t_s: float) -> float:
+        """Visible light level (0..1) at ``t_s`` (any time since the last target change)."""
+        if t_s < self._anchor_t_s:
+            raise ValueError(
+                f"Lamp {self.index}: level_at(t_s={t_s}) precedes the last target change at "
+                f"{self._anchor_t_s}; past levels are not stored"
+            )
+        return _ramp(self._anchor_level, self._target, self.spec, t_s - self._anchor_t_s)[0]
+
+    def reached_at_s(self) -> float:
+        """Time (s) at which the level reaches (or reached) the current target."""
+        swing_s = self.spec.ramp_up_s if self._target >= self._anchor_level else self.spec.fade_s
+        return self._anchor_t_s + abs(self._target - self._anchor_level) * swing_s
+
+    def power_w(self, t_s: float) -> float:
+        """Instantaneous electrical power (W) at ``t_s``."""
+        return self.spec.rated_power_w * self.level_at(t_s) + self._fixed_power_w()
+
+    def _fixed_power_w(self) -> float:
+        return (self.spec.standby_power_w if self.standby else 0.0) + (
+            self.spec.sensing_power_w if self.senses else 0.0
+        )
+
+    def _open_segment(self) -> tuple[float, float]:
+        _, integral, on_s = _ramp(
+            self._anchor_level, self._target, self.spec, self._clock_t_s - self._anchor_t_s
+        )
+        return integral, on_s
+
+    @property
+    def light_integral_s(self) -> float:
+        """Integral of the level over [t0, t_s] (full-light-equivalent seconds)."""
+        return self._closed_level_s + self._open_segment()[0]
+
+    @property
+    def on_time_s(self) -> float:
+        """Seconds in [t0, t_s] with the level above ``dim_level``."""
+        return self._closed_on_s + self._open_segment()[1]
+
+    @property
+    def luminaire_energy_j(self) -> float:
+        return self.spec.rated_power_w * self.light_integral_s
+
+    @property
+    def standby_energy_j(self) -> float:
+        return (self.spec.standby_power_w if self.standby else 0.0) * (self._clock_t_s - self._t0_s)
+
+    @property
+    def sensing_energy_j(self) -> float:
+        return (self.spec.sensing_power_w if self.senses else 0.0) * (self._clock_t_s - self._t0_s)
+
+    @property
+    def energy_j(self) -> float:
+        """Total electrical energy (J) over [t0, t_s]: luminaire + standby + sensing."""
+        return self.luminaire_energy_j + self.standby_energy_j + self.sensing_energy_j
+
+    def __repr__(self) -> str:
+        return (
+            f"Lamp(index={self.index}, t_s={self._clock_t_s}, target={self._target}, "
+            f"energy_j={self.energy_j:.3f}, switches={self.switches})"
+        )
