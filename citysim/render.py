@@ -1,0 +1,254 @@
+"""IR-like camera frames of the street, with per-frame ground truth (contract E).
+
+``CameraRenderer(camera, street, params, rng).render(t_s, agents, lamp_levels)``
+returns an 8-bit grayscale frame as the lamp's camera would see it and, for
+every agent whose silhouette shows in the frame, its class and bounding box.
+
+A frame is built on the camera's undistorted canvas (``render_canvas``), in
+linear radiance (``render_light``):
+
+1. the cached static background re-lit by the lamps that are on, swaying
+   crowns composited (``render_background``);
+2. headlight and flashlight spots on the ground (``render_beams``);
+3. agents far to near, motion-blurred, hidden behind nearer standing things
+   (``render_agents``);
+4. glare blobs of carried lights and lamp heads, rain, insects (``render_beams``,
+   ``render_effects``);
+5. camera response to 8 bits, lens distortion by one remap, sensor noise.
+
+Ground truth: boxes are OpenCV ``boundingRect`` boxes (x, y, w, h) of the
+agent's *visible* rendered pixels in the output frame (with blur, the pixels
+the smeared agent covers more than half), clipped to the frame.
+``distance_m`` is the forward ground distance of the footprint centre along
+the camera heading, the quantity ``detector.features`` estimates (eq. 4).
+Agents entirely hidden or out of view are not reported.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+
+import cv2
+import numpy as np
+
+from citysim import render_light as light
+from citysim.agents import AgentState
+from citysim.render_agents import AgentLighting, AgentPainter, DrawnAgent
+from citysim.render_background import ShadingInputs, StaticScene
+from citysim.render_beams import (
+    BEAMS,
+    LAMP_HEAD_GLARE,
+    LAMP_HEAD_SIZE_M,
+    add_ground_spot,
+    agent_glare_sources,
+    glare,
+)
+from citysim.render_canvas import build_canvas
+from citysim.render_effects import Insects, SensorNoise, draw_rain
+from citysim.street import Street
+from detector.camera import CameraModel
+
+#: An agent hidden behind nearer things for more than this fraction is not fully visible.
+MAX_HIDDEN_FRACTION = 0.5
+
+_RANGES: dict[str, tuple[float, float]] = {
+    "ir_emitter_power": (0.0, 1e6),
+    "ambient_light": (0.0, 1.0),
+    "sensor_noise_std_dn": (0.0, 100.0),
+    "exposure_ms": (0.0, 1000.0),
+    "rain_drops_per_frame": (0, 100_000),
+    "insects_per_min": (0.0, 1e4),
+    "wind_mps": (0.0, 60.0),
+}
+
+
+@dataclass(frozen=True)
+class RenderParams:
+    """How the camera and the night look.
+
+    ``ir_emitter_power``: radiance x m^2 the IR emitter gives a white surface
+    facing it (1.0 = full scale at 1 m; 60 makes a 0.25-reflectance road ~10 m
+    ahead of a 4 m pole read ~55 DN). ``ambient_light``: 0 night .. 1 day.
+    ``wind_mps`` drives the crowns' sway (an addition to the contract, with a default).
+    """
+
+    ir_emitter_power: float = 60.0
+    ambient_light: float = 0.0
+    sensor_noise_std_dn: float = 3.0
+    exposure_ms: float = 30.0
+    motion_blur: bool = True
+    distortion: bool = True
+    lamp_light: bool = True
+    rain_drops_per_frame: int = 0
+    insects_per_min: float = 0.0
+    branch_sway: bool = True
+    wind_mps: float = 3.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in _RANGES:
+                lo, hi = _RANGES[f.name]
+                if (
+                    not isinstance(value, int | float)
+                    or isinstance(value, bool)
+                    or not lo <= value <= hi
+                ):
+                    raise ValueError(
+                        f"RenderParams.{f.name}: must be a number in [{lo}, {hi}], got {value!r}"
+                    )
+            elif not isinstance(value, bool):
+                raise ValueError(f"RenderParams.{f.name}: must be true or false, got {value!r}")
+
+
+@dataclass(frozen=True)
+class TruthObject:
+    """One agent visible in a frame. Box in px, OpenCV boundingRect convention."""
+
+    object_id: int
+    cls: str
+    x: int
+    y: int
+    w: int
+    h: int
+    touches_border: bool
+    fully_visible: bool
+    distance_m: float
+
+
+@dataclass(frozen=True)
+class RenderedFrame:
+    image: np.ndarray  # uint8 (H, W)
+    truth: tuple[TruthObject, ...]
+
+
+class CameraRenderer:
+    """Renders one camera's frames; the static scene is prepared once here."""
+
+    def __init__(
+        self, camera: CameraModel, street: Street, params: RenderParams, rng: np.random.Generator
+    ) -> None:
+        self.camera = camera
+        self.street = street
+        self.params = params
+        self.rng = rng
+        self.canvas = build_canvas(camera, params.distortion)
+        self.lamp_positions_m = np.array(
+            [[lamp.x_m, lamp.y_m, lamp.pole_height_m] for lamp in street.lamps], dtype=np.float64
+        ).reshape(-1, 3)
+        shading = ShadingInputs(
+            params.ambient_light, params.ir_emitter_power, self.lamp_positions_m
+        )
+        self.scene = StaticScene(
+            self.canvas, street, shading, rng, params.branch_sway, params.wind_mps
+        )
+        self.painter = AgentPainter(self.canvas, params.exposure_ms, params.motion_blur)
+        self.noise = (
+            SensorNoise(rng, camera.height_px, camera.width_px, params.sensor_noise_std_dn)
+            if params.sensor_noise_std_dn > 0.0
+            else None
+        )
+        self.insects = Insects(params.insects_per_min)
+
+    def _levels(self, lamp_levels: Sequence[float]) -> np.ndarray:
+        levels = np.asarray(lamp_levels, dtype=np.float64).reshape(-1)
+        if len(levels) != len(self.street.lamps):
+            raise ValueError(
+                f"lamp_levels: need one level per street lamp ({len(self.street.lamps)}), got {len(levels)}"
+            )
+        if not self.params.lamp_light:
+            return np.zeros_like(levels)
+        return np.clip(np.nan_to_num(levels, nan=0.0), 0.0, 1.0)
+
+    def render(
+        self, t_s: float, agents: Sequence[AgentState], lamp_levels: Sequence[float]
+    ) -> RenderedFrame:
+        """The frame at time ``t_s`` (s) with ``agents`` and each street lamp at ``lamp_levels`` (0..1)."""
+        p = self.params
+        levels = self._levels(lamp_levels)
+        agents = list(agents)
+        img, depth = self.scene.compose(t_s, levels)
+
+        spot_gain = 1.0 - p.ambient_light
+        for agent in agents:
+            spec = BEAMS.get(agent.cls)
+            if agent.light_on and spec is not None and spot_gain > 0.0:
+                add_ground_spot(self.scene, img, agent, spec, spot_gain)
+
+        on = levels > 0.0
+        lighting = AgentLighting(
+            p.ir_emitter_power, p.ambient_light, self.lamp_positions_m[on], levels[on]
+        )
+        labels = np.zeros(self.canvas.shape, np.uint8 if len(agents) < 255 else np.uint16)
+        drawn = self.painter.paint(agents, lighting, img, depth, labels)
+
+        wet = p.rain_drops_per_frame > 0
+        pts, power, size = agent_glare_sources(self.canvas, agents, p.ambient_light)
+        if on.any():
+            pts = np.concatenate([pts, self.lamp_positions_m[on]])
+            power = np.concatenate([power, LAMP_HEAD_GLARE * levels[on]])
+            size = np.concatenate([size, np.full(int(on.sum()), LAMP_HEAD_SIZE_M)])
+        glare(self.canvas, img, depth, pts, power, size, wet)
+        exposure_s = p.exposure_ms / 1000.0
+        draw_rain(
+            self.canvas,
+            img,
+            p.rain_drops_per_frame,
+            exposure_s,
+            p.ir_emitter_power,
+            p.ambient_light,
+            self.rng,
+        )
+        self.insects.draw(
+            self.canvas, img, t_s, exposure_s, p.ir_emitter_power, p.ambient_light, self.rng
+        )
+
+        frame = self.canvas.to_frame(light.radiance_to_dn(img))
+        if self.noise is not None:
+            frame = self.noise.apply(frame, self.rng)
+        truth = self._truth(agents, drawn, labels) if drawn else ()
+        return RenderedFrame(frame, truth)
+
+    def _truth(
+        self, agents: list[AgentState], drawn: list[DrawnAgent], labels: np.ndarray
+    ) -> tuple[TruthObject, ...]:
+        fw, fh = self.camera.width_px, self.camera.height_px
+        xy = np.array([[a.x_m, a.y_m] for a in agents])
+        forward_m = self.camera.forward_and_lateral_m(xy)[:, 0]
+        # one remap of the whole label image beats many small ones once a few agents are in view
+        whole = self.canvas.to_frame(labels, nearest=True) if len(drawn) > 3 else None
+        out = []
+        for d in sorted(drawn, key=lambda d: d.index):
+            x0, y0, x1, y1 = d.roi
+            visible_px = cv2.countNonZero(cv2.compare(labels[y0:y1, x0:x1], d.label, cv2.CMP_EQ))
+            if visible_px == 0:
+                continue
+            box = self.canvas.frame_box(d.roi)
+            if box is None:
+                continue
+            if whole is None:
+                frame_labels = self.canvas.to_frame_box(labels, box)
+            else:
+                frame_labels = whole[box[1] : box[3], box[0] : box[2]]
+            bx, by, bw, bh = cv2.boundingRect(cv2.compare(frame_labels, d.label, cv2.CMP_EQ))
+            if bw == 0:
+                continue
+            x, y = bx + box[0], by + box[1]
+            touches = x == 0 or y == 0 or x + bw == fw or y + bh == fh
+            hidden = 1.0 - min(visible_px / d.silhouette_px, 1.0)
+            agent = agents[d.index]
+            out.append(
+                TruthObject(
+                    agent.object_id,
+                    agent.cls,
+                    int(x),
+                    int(y),
+                    int(bw),
+                    int(bh),
+                    bool(touches),
+                    bool(not touches and hidden <= MAX_HIDDEN_FRACTION),
+                    float(forward_m[d.index]),
+                )
+            )
+        return tuple(out)

@@ -1,0 +1,327 @@
+"""The static background of one camera: ray-cast once, re-lit every frame.
+
+At construction every canvas pixel's ray is cast against the ground plane and
+the street's solids (``citysim.render_scenery``), which gives per pixel the
+surface, its distance, normal and reflectance. From those:
+
+* ``base``: radiance from the IR emitter, daylight and sky glow (fixed);
+* one *pool* image per street lamp that reaches the view: its light at level 1,
+  so a frame's background is ``base + sum(level_i * pool_i)`` - a few
+  vectorised multiply-adds, no per-pixel Python;
+* ``occluder_depth``: distance to the nearest *standing* surface (inf on the
+  ground and sky), against which agents are hidden;
+* per visible ground pixel its world point and reflectance, for headlight
+  spots.
+
+Tree crowns, when they sway, are kept as sprites (their own radiance, alpha
+and depth) shifted each frame by the wind and composited over the rest.
+
+Conventions: canvas of ``citysim.render_canvas`` (ideal pinhole pixels),
+radiance in linear full-scale units of ``citysim.render_light``, distances in
+metres along each pixel's ray.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from citysim import render_light as light
+from citysim.render_canvas import Canvas, canvas_hull_px, roi_of
+from citysim.render_scenery import Ellipsoid, Solid, _grain, ground_reflectance, scenery_parts
+from citysim.street import Street
+
+#: A lamp whose light adds less than this radiance anywhere in view is ignored.
+POOL_MIN_RADIANCE = 2e-5
+#: Crown displacement per unit wind speed, m per (m/s).
+SWAY_M_PER_MPS = 0.025
+#: Leaf texture: crowns are patchy, not painted boxes.
+LEAF_TEXTURE_AMPLITUDE = 0.3
+FAR_DEPTH_M = 1e9
+
+
+@dataclass(frozen=True, eq=False)
+class LampPool:
+    """One lamp's light on the static scene at level 1, over a canvas box (x0, y0, x1, y1)."""
+
+    lamp_index: int
+    roi: tuple[int, int, int, int]
+    radiance: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class CrownSprite:
+    """A swaying tree crown rendered at rest over ``roi`` (margins for the sway included)."""
+
+    roi: tuple[int, int, int, int]
+    alpha: np.ndarray
+    near_m: float  # distance to the crown's nearest visible point: its depth for occlusion
+    base: np.ndarray  # radiance x alpha (premultiplied), like the pools
+    pools: tuple[tuple[int, np.ndarray], ...]
+    behind: np.ndarray  # 1 where no standing static surface is nearer than the crown, else 0
+    jacobian_px_per_m: np.ndarray  # (2, 2): canvas motion of the crown per metre of sway in x, y
+    centre_m: np.ndarray
+    amplitude_m: float
+    direction: np.ndarray  # (2,) unit, ground plane
+    freq_hz: float
+    phases_rad: tuple[float, float]
+
+    def displacement_m(self, t_s: float) -> np.ndarray:
+        """Horizontal crown offset (x, y) at time t: a gust-like sum of two sines, m."""
+        w = 2.0 * math.pi * self.freq_hz * t_s
+        s = 0.75 * math.sin(w + self.phases_rad[0]) + 0.25 * math.sin(2.3 * w + self.phases_rad[1])
+        return self.amplitude_m * s * self.direction
+
+    def displacement_px(self, t_s: float) -> np.ndarray:
+        """Canvas shift of the crown at time t (linearised projection: sway is centimetres)."""
+        return self.jacobian_px_per_m @ self.displacement_m(t_s)
+
+
+@dataclass(frozen=True)
+class ShadingInputs:
+    ambient_light: float
+    ir_emitter_power: float
+    lamp_positions_m: np.ndarray  # (L, 3) luminaires
+
+
+def shade_surfaces(
+    canvas: Canvas,
+    flat_idx: np.ndarray,
+    t_m: np.ndarray,
+    normals: np.ndarray,
+    rho: np.ndarray,
+    shading: ShadingInputs,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Radiance of N hit pixels: (base (N,), lamp components (N, L) at level 1)."""
+    dirs = canvas.rays_world.reshape(-1, 3)[flat_idx]
+    cos_inc = np.abs(np.einsum("nk,nk->n", dirs, normals))
+    cos_axis = canvas.cos_off_axis.reshape(-1)[flat_idx]
+    irr = light.emitter_irradiance(
+        shading.ir_emitter_power, shading.ambient_light, t_m, cos_inc, cos_axis
+    )
+    irr = irr + light.day_irradiance(shading.ambient_light, normals[:, 2])
+    irr = irr + light.night_irradiance(shading.ambient_light)
+    points = canvas.camera.position_m + dirs * t_m[:, None]
+    lamps = light.lamp_irradiance(points, normals, shading.lamp_positions_m)
+    return rho * irr, rho[:, None] * lamps
+
+
+def _roi_indices(roi: tuple[int, int, int, int], width_px: int) -> np.ndarray:
+    x0, y0, x1, y1 = roi
+    rows = np.arange(y0, y1)[:, None]
+    cols = np.arange(x0, x1)[None, :]
+    return (rows * width_px + cols).ravel()
+
+
+def _cast_solids(
+    canvas: Canvas, solids: tuple[Solid, ...], n_pixels: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nearest solid per canvas pixel: (t_m (N,), normals (N, 3), reflectance (N,))."""
+    dirs = canvas.rays_world.reshape(-1, 3)
+    origin = canvas.camera.position_m
+    depth = np.full(n_pixels, np.inf)
+    normals = np.zeros((n_pixels, 3))
+    rho = np.zeros(n_pixels)
+    for solid in solids:
+        uv = canvas_hull_px(canvas, solid.corners_m())
+        roi = None if uv is None else roi_of(uv, canvas)
+        if roi is None:
+            continue
+        idx = _roi_indices(roi, canvas.width_px)
+        t, n = solid.cast(origin, dirs[idx])
+        nearer = t < depth[idx]
+        if not nearer.any():
+            continue
+        sel = idx[nearer]
+        depth[sel] = t[nearer]
+        normals[sel] = n[nearer]
+        r = np.full(len(sel), solid.ir_reflectance)
+        if isinstance(solid, Ellipsoid):
+            hit = origin + dirs[sel] * t[nearer][:, None]
+            r *= 1.0 + LEAF_TEXTURE_AMPLITUDE * _grain(
+                hit[:, 0] + 0.7 * hit[:, 2], hit[:, 1] - 0.5 * hit[:, 2]
+            )
+        rho[sel] = r
+    return depth, normals, rho
+
+
+class StaticScene:
+    """Everything about one camera's view that does not move (see module docstring)."""
+
+    def __init__(
+        self,
+        canvas: Canvas,
+        street: Street,
+        shading: ShadingInputs,
+        rng: np.random.Generator,
+        sway: bool,
+        wind_mps: float,
+    ) -> None:
+        self.canvas = canvas
+        self.shading = shading
+        cam = canvas.camera
+        h, w = canvas.shape
+        n = h * w
+        parts = scenery_parts(street, (cam.x_m, cam.y_m))
+        sway = sway and wind_mps > 0.0
+        solids = parts.solids if sway else parts.solids + parts.crowns
+        depth, normals, rho = _cast_solids(canvas, solids, n)
+        self.occluder_depth = (
+            np.where(np.isfinite(depth), depth, FAR_DEPTH_M).astype(np.float32).reshape(h, w)
+        )
+
+        dirs = canvas.rays_world.reshape(-1, 3)
+        with np.errstate(divide="ignore"):
+            t_ground = np.where(dirs[:, 2] < -1e-9, -cam.height_m / dirs[:, 2], np.inf)
+        ground = t_ground < depth
+        gpts = cam.position_m + dirs[ground] * t_ground[ground][:, None]
+        depth[ground] = t_ground[ground]
+        normals[ground] = (0.0, 0.0, 1.0)
+        rho[ground] = ground_reflectance(street, gpts[:, 0], gpts[:, 1])
+
+        # camera-frame depth of the nearest ground the camera sees: carried-light spots are clipped there
+        ground_cam_z = t_ground[ground] * canvas.cos_off_axis.reshape(-1)[ground]
+        self.nearest_ground_cam_z_m = float(ground_cam_z.min()) if ground.any() else FAR_DEPTH_M
+        self.ground_xy_m = np.full((n, 2), np.nan, dtype=np.float32)
+        self.ground_xy_m[ground] = gpts[:, :2]
+        self.ground_xy_m = self.ground_xy_m.reshape(h, w, 2)
+        self.ground_reflectance = np.zeros(n, dtype=np.float32)
+        self.ground_reflectance[ground] = rho[ground]
+        self.ground_reflectance = self.ground_reflectance.reshape(h, w)
+
+        hit = np.flatnonzero(np.isfinite(depth))
+        base_hit, pools_hit = shade_surfaces(
+            canvas, hit, depth[hit], normals[hit], rho[hit], shading
+        )
+        base = np.full(n, light.sky_radiance(shading.ambient_light), dtype=np.float32)
+        base[hit] = base_hit
+        self.base = base.reshape(h, w)
+        self.pools = self._pools(hit, pools_hit, n)
+        self.crowns = (
+            tuple(self._crown_sprite(c, rng, wind_mps) for c in parts.crowns) if sway else ()
+        )
+        self.crowns = tuple(c for c in self.crowns if c is not None)
+
+    # ------------------------------------------------------------------ build
+    def _pools(self, hit: np.ndarray, pools_hit: np.ndarray, n: int) -> tuple[LampPool, ...]:
+        h, w = self.canvas.shape
+        out = []
+        for j in range(pools_hit.shape[1]):
+            col = pools_hit[:, j]
+            lit = col > POOL_MIN_RADIANCE
+            if not lit.any():
+                continue
+            full = np.zeros(n, dtype=np.float32)
+            full[hit] = col
+            rows, cols = np.divmod(hit[lit], w)
+            roi = (int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1)
+            img = full.reshape(h, w)[roi[1] : roi[3], roi[0] : roi[2]].copy()
+            out.append(LampPool(j, roi, img))
+        return tuple(out)
+
+    def _crown_sprite(
+        self, crown: Ellipsoid, rng: np.random.Generator, wind_mps: float
+    ) -> CrownSprite | None:
+        canvas = self.canvas
+        amplitude_m = SWAY_M_PER_MPS * wind_mps
+        grown = Ellipsoid(crown.centre_m, crown.radii_m + amplitude_m, crown.ir_reflectance)
+        uv = canvas_hull_px(canvas, grown.corners_m())
+        roi = None if uv is None else roi_of(uv, canvas, margin_px=2)
+        # draw parameters whether or not the crown is in view, so the rng stream does not depend on the view
+        angle = rng.uniform(-0.4, 0.4)
+        freq_hz = rng.uniform(0.25, 0.6)
+        phases = (float(rng.uniform(0, 2 * math.pi)), float(rng.uniform(0, 2 * math.pi)))
+        if roi is None:
+            return None
+        idx = _roi_indices(roi, canvas.width_px)
+        depth, normals, rho = _cast_solids(canvas, (crown,), canvas.width_px * canvas.height_px)
+        t = depth[idx]
+        hit = np.isfinite(t)
+        if not hit.any():
+            return None
+        base_hit, pools_hit = shade_surfaces(
+            canvas, idx[hit], t[hit], normals[idx][hit], rho[idx][hit], self.shading
+        )
+        shape = (roi[3] - roi[1], roi[2] - roi[0])
+
+        def sprite(
+            values: np.ndarray, fill: float
+        ) -> np.ndarray:  # alpha is 1 on hits: premultiplied
+            out = np.full(len(idx), fill, dtype=np.float32)
+            out[hit] = values
+            return out.reshape(shape)
+
+        pools = tuple(
+            (j, sprite(pools_hit[:, j], 0.0))
+            for j in range(pools_hit.shape[1])
+            if pools_hit[:, j].max() > POOL_MIN_RADIANCE
+        )
+        near_m = float(t[hit].min())
+        x0, y0, x1, y1 = roi
+        behind = (self.occluder_depth[y0:y1, x0:x1] > near_m).astype(np.float32)
+        c = crown.centre_m
+        uv = canvas.project(np.array([c, c + [0.01, 0.0, 0.0], c + [0.0, 0.01, 0.0]]))
+        jacobian = np.column_stack([uv[1] - uv[0], uv[2] - uv[0]]) / 0.01
+        return CrownSprite(
+            roi,
+            sprite(np.ones(hit.sum()), 0.0),
+            near_m,
+            sprite(base_hit, 0.0),
+            pools,
+            behind,
+            jacobian,
+            crown.centre_m,
+            amplitude_m,
+            np.array([math.cos(angle), math.sin(angle)]),
+            float(freq_hz),
+            phases,
+        )
+
+    # -------------------------------------------------------------- per frame
+    def compose(self, t_s: float, lamp_levels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """This frame's background: (radiance (H, W) float32, a fresh array; depth of standing
+        surfaces (H, W) float32, the cached array unless crowns moved - do not write to it)."""
+        img = self.base.copy()
+        for pool in self.pools:
+            level = float(lamp_levels[pool.lamp_index])
+            if level > 0.0:
+                x0, y0, x1, y1 = pool.roi
+                view = img[y0:y1, x0:x1]
+                cv2.scaleAdd(pool.radiance, level, view, dst=view)
+        if not self.crowns:
+            return img, self.occluder_depth
+        depth = self.occluder_depth.copy()
+        for crown in self.crowns:
+            self._composite_crown(crown, t_s, lamp_levels, img, depth)
+        return img, depth
+
+    def _composite_crown(
+        self,
+        crown: CrownSprite,
+        t_s: float,
+        lamp_levels: np.ndarray,
+        img: np.ndarray,
+        depth: np.ndarray,
+    ) -> None:
+        du, dv = crown.displacement_px(t_s)
+        if not (np.isfinite(du) and np.isfinite(dv)):
+            return
+        value = crown.base
+        for j, pool in crown.pools:
+            if lamp_levels[j] > 0.0:
+                value = cv2.scaleAdd(pool, float(lamp_levels[j]), value)
+        shift = np.array([[1.0, 0.0, du], [0.0, 1.0, dv]])
+        size = (value.shape[1], value.shape[0])
+        value = cv2.warpAffine(value, shift, size, flags=cv2.INTER_LINEAR, borderValue=0.0)
+        alpha = cv2.warpAffine(crown.alpha, shift, size, flags=cv2.INTER_LINEAR, borderValue=0.0)
+        # nearer static things (a parked car before the tree) stay in front
+        value = cv2.multiply(value, crown.behind)
+        alpha = cv2.multiply(alpha, crown.behind)
+        x0, y0, x1, y1 = crown.roi
+        view = img[y0:y1, x0:x1]
+        cv2.subtract(view, cv2.multiply(view, alpha), dst=view)
+        cv2.add(view, value, dst=view)
+        depth[y0:y1, x0:x1][alpha > 0.5] = crown.near_m

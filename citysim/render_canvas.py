@@ -1,0 +1,215 @@
+"""The ideal-pinhole drawing surface of one camera, and the lens-distortion remap.
+
+The renderer draws every frame on an *undistorted* canvas and, when the lens
+distorts, bends the finished frame once with ``cv2.remap``. Why this and not
+projecting every vertex with distortion: distortion bends straight edges, so
+the image of a convex part is no longer the hull of its distorted vertices;
+and the distortion polynomial folds back far outside the image, which breaks
+walls and roads that run past the camera. Remapping is exact up to bilinear
+interpolation (the frame pixel ``p`` samples the canvas at
+``undistort(p)``, precisely what ``CameraModel.project(distort=True)``
+inverts) and costs one ~0.1 ms remap per frame.
+
+Conventions: canvas pixel ``(col, row)`` is the ideal (undistorted) image
+point ``(u, v) = (col + x0_px, row + y0_px)`` in OpenCV pixel coordinates
+(pixel centres on integers). With distortion the canvas is larger than the
+frame (barrel lenses see more than their pinhole), so it covers every frame
+pixel's ideal position. World frame of DESIGN.md, metres.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from detector.camera import CameraModel
+
+#: Geometry in front of this camera-frame depth is drawn; nearer is clipped away.
+Z_NEAR_M = 0.05
+#: A canvas never grows past this multiple of the frame (wild distortion coefficients).
+MAX_CANVAS_SCALE = 3.0
+
+
+@dataclass(frozen=True, eq=False)
+class Canvas:
+    """One camera's drawing surface: per-pixel rays and the frame remap."""
+
+    camera: CameraModel
+    x0_px: int
+    y0_px: int
+    width_px: int
+    height_px: int
+    #: fixed-point maps for ``cv2.remap`` frame <- canvas, or None when frame == canvas
+    remap_maps: tuple[np.ndarray, np.ndarray] | None
+    #: (H, W, 3) float64 unit world direction of each canvas pixel's ray
+    rays_world: np.ndarray
+    #: (H, W) cosine between each ray and the optical axis
+    cos_off_axis: np.ndarray
+    #: (u, v) each (H, W) float32: frame position (distorted) of each canvas pixel; None when frame == canvas
+    frame_uv: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.height_px, self.width_px)
+
+    def project(self, points_world_m: np.ndarray) -> np.ndarray:
+        """(N, 3) world points -> (N, 2) canvas coordinates (NaN behind the camera)."""
+        uv = self.camera.project(points_world_m, distort=False)
+        uv[:, 0] -= self.x0_px
+        uv[:, 1] -= self.y0_px
+        return uv
+
+    def cam_to_canvas(self, points_cam_m: np.ndarray) -> np.ndarray:
+        """(N, 3) camera-frame points with z > 0 -> (N, 2) canvas coordinates."""
+        cam = self.camera
+        z = points_cam_m[:, 2]
+        return np.column_stack(
+            [
+                cam.fx_px * points_cam_m[:, 0] / z + cam.cx_px - self.x0_px,
+                cam.fy_px * points_cam_m[:, 1] / z + cam.cy_px - self.y0_px,
+            ]
+        )
+
+    def to_frame(self, canvas_img: np.ndarray, nearest: bool = False) -> np.ndarray:
+        """A canvas-size image -> the camera's (distorted) frame."""
+        if self.remap_maps is None:
+            return canvas_img
+        interp = cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR
+        return cv2.remap(
+            canvas_img,
+            self.remap_maps[0],
+            self.remap_maps[1],
+            interp,
+            borderMode=cv2.BORDER_REPLICATE,
+        )
+
+    def frame_box(self, roi: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
+        """Frame box (x0, y0, x1, y1), exclusive ends, that holds everything of canvas box ``roi``."""
+        x0, y0, x1, y1 = roi
+        if self.frame_uv is None:
+            return roi
+        # the lens maps the box's border to its image's border, a gently bent rectangle: its
+        # extremes are at the corners or edge midpoints (1 px of margin covers the bending)
+        xm, ym = (x0 + x1) // 2, (y0 + y1) // 2
+        samples = (
+            (y0, x0),
+            (y0, xm),
+            (y0, x1 - 1),
+            (ym, x0),
+            (ym, x1 - 1),
+            (y1 - 1, x0),
+            (y1 - 1, xm),
+            (y1 - 1, x1 - 1),
+        )
+        fu = [self.frame_uv[0][p] for p in samples]
+        fv = [self.frame_uv[1][p] for p in samples]
+        lo = (math.floor(min(fu)) - 2, math.floor(min(fv)) - 2)
+        hi = (math.ceil(max(fu)) + 3, math.ceil(max(fv)) + 3)
+        fw, fh = self.camera.width_px, self.camera.height_px
+        fx0, fy0 = max(int(lo[0]), 0), max(int(lo[1]), 0)
+        fx1, fy1 = min(int(hi[0]), fw), min(int(hi[1]), fh)
+        if fx1 <= fx0 or fy1 <= fy0:
+            return None
+        return fx0, fy0, fx1, fy1
+
+    def to_frame_box(self, canvas_img: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
+        """The frame box ``box`` (x0, y0, x1, y1) of ``to_frame(canvas_img, nearest=True)``, computed alone."""
+        x0, y0, x1, y1 = box
+        if self.remap_maps is None:
+            return canvas_img[y0:y1, x0:x1]
+        m1 = np.ascontiguousarray(self.remap_maps[0][y0:y1, x0:x1])
+        m2 = np.ascontiguousarray(self.remap_maps[1][y0:y1, x0:x1])
+        return cv2.remap(canvas_img, m1, m2, cv2.INTER_NEAREST, borderMode=cv2.BORDER_REPLICATE)
+
+
+def build_canvas(camera: CameraModel, distortion: bool) -> Canvas:
+    """The canvas for ``camera``; with ``distortion`` and a distorting lens, a remapped one."""
+    w, h = camera.width_px, camera.height_px
+    maps = None
+    frame_uv = None
+    x0 = y0 = 0
+    cw, ch = w, h
+    if distortion and camera.has_distortion:
+        cols, rows = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+        ideal = camera.undistort_pixels(np.column_stack([cols.ravel(), rows.ravel()]))
+        lim_x, lim_y = MAX_CANVAS_SCALE * w, MAX_CANVAS_SCALE * h
+        ideal[:, 0] = np.clip(ideal[:, 0], w / 2 - lim_x / 2, w / 2 + lim_x / 2)
+        ideal[:, 1] = np.clip(ideal[:, 1], h / 2 - lim_y / 2, h / 2 + lim_y / 2)
+        x0 = int(np.floor(ideal[:, 0].min())) - 2
+        y0 = int(np.floor(ideal[:, 1].min())) - 2
+        cw = int(np.ceil(ideal[:, 0].max())) + 3 - x0
+        ch = int(np.ceil(ideal[:, 1].max())) + 3 - y0
+        map_x = (ideal[:, 0] - x0).reshape(h, w).astype(np.float32)
+        map_y = (ideal[:, 1] - y0).reshape(h, w).astype(np.float32)
+        maps = cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+    cols, rows = np.meshgrid(
+        np.arange(cw, dtype=np.float64) + x0, np.arange(ch, dtype=np.float64) + y0
+    )
+    rays_cam = np.stack(
+        [
+            (cols - camera.cx_px) / camera.fx_px,
+            (rows - camera.cy_px) / camera.fy_px,
+            np.ones_like(cols),
+        ],
+        axis=-1,
+    )
+    norm = np.linalg.norm(rays_cam, axis=-1)
+    rays_cam /= norm[..., None]
+    rays_world = rays_cam @ camera.rotation_world_to_cam
+    if maps is not None:
+        pts = (rays_cam / rays_cam[..., 2:]).reshape(-1, 1, 3)
+        fwd, _ = cv2.projectPoints(
+            pts, np.zeros(3), np.zeros(3), camera.intrinsic_matrix, camera.distortion
+        )
+        fwd = fwd.reshape(ch, cw, 2)
+        frame_uv = (
+            np.ascontiguousarray(fwd[..., 0], np.float32),
+            np.ascontiguousarray(fwd[..., 1], np.float32),
+        )
+    return Canvas(
+        camera, x0, y0, cw, ch, maps, rays_world, (1.0 / norm).astype(np.float32), frame_uv
+    )
+
+
+def clip_solid_near(points_cam_m: np.ndarray, z_near_m: float = Z_NEAR_M) -> np.ndarray | None:
+    """Clip one convex solid (K, 3 camera-frame vertices) to ``z >= z_near``.
+
+    Returns the vertices of the clipped solid (their hull is exactly the solid
+    cut by the plane: the cut of every vertex-to-vertex segment lies in the
+    solid, and the cuts of its edges are among them), or None when nothing is
+    in front.
+    """
+    front = points_cam_m[:, 2] >= z_near_m
+    if front.all():
+        return points_cam_m
+    if not front.any():
+        return None
+    a, b = points_cam_m[front], points_cam_m[~front]
+    za, zb = a[:, 2][:, None], b[:, 2][None, :]
+    s = (z_near_m - za) / (zb - za)  # (Na, Nb) in (0, 1]
+    cuts = a[:, None, :] + s[..., None] * (b[None, :, :] - a[:, None, :])
+    return np.concatenate([a, cuts.reshape(-1, 3)])
+
+
+def canvas_hull_px(canvas: Canvas, points_world_m: np.ndarray) -> np.ndarray | None:
+    """Canvas coordinates (M, 2) of one convex solid's (K, 3 world) near-clipped vertices."""
+    cam_pts = canvas.camera.world_to_cam(points_world_m)
+    clipped = clip_solid_near(cam_pts)
+    if clipped is None:
+        return None
+    return canvas.cam_to_canvas(clipped)
+
+
+def roi_of(uv: np.ndarray, canvas: Canvas, margin_px: int = 1) -> tuple[int, int, int, int] | None:
+    """Integer canvas box (x0, y0, x1, y1), exclusive ends, around points ``uv``; None if off-canvas."""
+    lo = np.floor(uv.min(axis=0)) - margin_px
+    hi = np.ceil(uv.max(axis=0)) + margin_px + 1
+    x0, y0 = max(int(max(lo[0], -1e9)), 0), max(int(max(lo[1], -1e9)), 0)
+    x1 = min(int(min(hi[0], 1e9)), canvas.width_px)
+    y1 = min(int(min(hi[1], 1e9)), canvas.height_px)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1, y1
