@@ -1,0 +1,258 @@
+"""Region division (paper section 5.2): cut an object away from its own light spot.
+
+At night a cyclist's or car's headlight, or a pedestrian's flashlight, throws
+a bright spot on the ground next to the object, and background subtraction
+joins the two into one region. Its features then describe neither: the
+bounding box is wide and its bottom is the spot's, so the distance, width and
+height are all wrong. Following the paper, such a region is divided using its
+vertical and horizontal mask histograms and the criteria extent, height to
+width ratio and estimated contour area, and the features are computed again
+for the object part.
+
+How a region is read (all in the region's own bounding box, pixels):
+
+* Column heights (the vertical histogram) separate the *body*, the columns at
+  least ``tall_fraction`` of the tallest column, from *side* pixels left and
+  right of them. A light spot is flat and lies on the ground, so its side
+  pixels sit in the bottom rows and are short next to the body.
+* Row widths (the horizontal histogram) then place the body's foot row: a spot
+  reaching out on both sides lies in front of the object, so the body ends
+  where the rows widen sharply; a spot on one side lies beside it, at about
+  the same distance, so the feet are at the spot's widest row (an ellipse on
+  the ground is widest at its centre).
+* The division stands only if, measured in metres by ``region_features``, the
+  spot part is flat (height / width below ``max_spot_height_to_width``) and the
+  object part is more upright and more compact (higher extent) than the whole.
+
+Candidates are regions of low extent or with an estimated contour area beyond
+every Table 1 class. Measured on projected ``detector.shapes`` models with the
+paper's scene B camera (see the segmentation engineer's report): lone
+pedestrians, groups and vehicles have extents of 0.5-0.8 (median 0.65), a
+cyclist 0.47-0.64; an object merged with its spot typically 0.3-0.6.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from detector.camera import CameraModel
+from detector.features import region_features
+from detector.segment import contour_boxes_and_areas
+
+# Table 1: the largest silhouette of any target class is a vehicle seen from
+# the side, 4.6 m long x 2 m high; a region estimated larger is more than one thing.
+LARGEST_CLASS_AREA_M2 = 4.6 * 2.0
+
+
+@dataclass(frozen=True)
+class DivisionParams:
+    """Thresholds of the division; fractions are of pixel counts unless named ``_m``.
+
+    ``max_extent``: regions with extent (contour area / box area) below it are candidates.
+    ``max_area_m2``: regions with estimated contour area above it are candidates.
+    ``tall_fraction``: body columns are at least this fraction of the tallest column.
+    ``max_side_height_fraction``: a spot is at most this fraction of the body's height (px).
+    ``max_spot_aspect``: a spot part's box height / width (px) is at most this (it is flat).
+    ``min_side_fraction``: the side pixels hold at least this fraction of the region's pixels.
+    ``max_spot_height_to_width``: the spot's estimated height / width (m) is at most this.
+    ``wide_row_factor``: a row is part of a spot in front when it is this much wider than the body.
+    ``spot_row_fraction``: spot rows have side pixels at least this fraction of the widest side row.
+    """
+
+    max_extent: float = 0.6
+    max_area_m2: float = LARGEST_CLASS_AREA_M2
+    tall_fraction: float = 0.5
+    max_side_height_fraction: float = 0.45
+    max_spot_aspect: float = 0.7
+    min_side_fraction: float = 0.1
+    max_spot_height_to_width: float = 0.6
+    wide_row_factor: float = 1.5
+    spot_row_fraction: float = 0.25
+
+    def __post_init__(self) -> None:
+        for name in (
+            "max_extent",
+            "tall_fraction",
+            "max_side_height_fraction",
+            "min_side_fraction",
+            "spot_row_fraction",
+        ):
+            value = getattr(self, name)
+            if not 0.0 < value <= 1.0:
+                raise ValueError(f"DivisionParams.{name} must be in (0, 1], got {value!r}")
+        for name in ("max_area_m2", "max_spot_aspect", "max_spot_height_to_width"):
+            value = getattr(self, name)
+            if not value > 0.0:
+                raise ValueError(f"DivisionParams.{name} must be > 0, got {value!r}")
+        if not self.wide_row_factor > 1.0:
+            raise ValueError(
+                f"DivisionParams.wide_row_factor must be > 1, got {self.wide_row_factor!r}"
+            )
+
+
+@dataclass(frozen=True)
+class Division:
+    """Regions after division, aligned row by row.
+
+    ``divided`` marks rows that are now the object part of a divided region. ``spot_boxes_px``
+    are the light-spot parts cut off (not classified: a part just shown to be
+    flat on the ground is no target).
+    """
+
+    boxes_px: np.ndarray  # (M, 4) int32
+    areas_px: np.ndarray  # (M,)
+    features: np.ndarray  # (M, 6)
+    valid: np.ndarray  # (M,) bool
+    divided: np.ndarray  # (M,) bool
+    spot_boxes_px: np.ndarray  # (S, 4) int32
+
+
+def split_object_and_spot(
+    roi: np.ndarray, params: DivisionParams = DivisionParams()
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Split one region's filled mask ``roi`` (h, w) into (object, spot) boolean masks, or None.
+
+    Pixel-only test (histograms); the metric criteria are applied by ``divide_regions``.
+    """
+    occ = roi > 0
+    h, w = occ.shape
+    if h < 6 or w < 6:
+        return None
+    col_h = np.count_nonzero(occ, axis=0)
+    tall = np.flatnonzero(col_h >= params.tall_fraction * col_h.max())
+    c0, c1 = int(tall[0]), int(tall[-1])
+    n_side = int(col_h[:c0].sum() + col_h[c1 + 1 :].sum())
+    if n_side < params.min_side_fraction * int(col_h.sum()):
+        return None
+    side = occ.copy()
+    side[:, c0 : c1 + 1] = False
+
+    body_rows = np.flatnonzero(occ[:, c0 : c1 + 1].any(axis=1))
+    b_top, b_bottom = int(body_rows[0]), int(body_rows[-1])
+    # slivers of the body's own outline (a shoulder, a sleeve) fall outside the
+    # tall columns too; the spot's rows are those where the side part is wide
+    left_w = np.count_nonzero(side[:, :c0], axis=1)
+    right_w = np.count_nonzero(side[:, c1 + 1 :], axis=1)
+    side_w = left_w + right_w
+    side_rows = np.flatnonzero(side_w >= params.spot_row_fraction * side_w.max())
+    s_top, s_bottom = int(side_rows[0]), int(side_rows[-1])
+    side_h = s_bottom - s_top + 1
+    if side_h > params.max_side_height_fraction * (b_bottom - b_top + 1):
+        return None
+
+    band_end = s_bottom + 1
+    if s_bottom < b_bottom - max(2, side_h // 4):
+        # spot behind the object (farther away, so higher in the image): the feet are the
+        # bottom; a spot far enough behind to reach the upper body would hardly join it
+        if s_bottom < (b_top + b_bottom) / 2:
+            return None
+        foot = b_bottom
+    elif min(left_w.max(), right_w.max()) >= params.spot_row_fraction * side_w.max():
+        # spot in front of the object: the body ends at the last narrow row above the spot
+        band_end = h
+        row_w = np.count_nonzero(occ[b_top : s_top + 1], axis=1)
+        body_w = float(np.median(row_w[:-1])) if len(row_w) > 1 else float(c1 - c0 + 1)
+        narrow = np.flatnonzero(row_w <= params.wide_row_factor * body_w)
+        foot = b_top + int(narrow[-1]) if len(narrow) else s_top - 1
+    else:
+        # spot beside the object, about as far away: feet at the spot's widest row
+        band_end = h
+        foot = s_top + int(np.argmax(side_w[s_top : s_bottom + 1]))
+    if foot <= b_top + 2:
+        return None
+
+    # the spot: side pixels in its rows, and whatever lies under the feet;
+    # everything else, slivers of the outline included, is the object
+    spot = np.zeros_like(occ)
+    spot[s_top:band_end] = side[s_top:band_end]
+    spot[foot + 1 :, c0 : c1 + 1] = occ[foot + 1 :, c0 : c1 + 1]
+    body = occ & ~spot
+    spot_rows = np.flatnonzero(spot.any(axis=1))
+    spot_cols = np.flatnonzero(spot.any(axis=0))
+    if len(spot_rows) == 0:
+        return None
+    spot_aspect = (spot_rows[-1] - spot_rows[0] + 1) / (spot_cols[-1] - spot_cols[0] + 1)
+    if spot_aspect > params.max_spot_aspect:
+        return None
+    return body, spot
+
+
+def _part_box_and_area(part: np.ndarray, x0: int, y0: int) -> tuple[np.ndarray, float] | None:
+    """Frame box (x, y, w, h) and Green's-theorem area of a part mask cut from a box at (x0, y0)."""
+    contours, _ = cv2.findContours(part.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not contours:
+        return None
+    boxes, areas = contour_boxes_and_areas(contours)
+    lo = boxes[:, :2].min(axis=0)
+    hi = (boxes[:, :2] + boxes[:, 2:]).max(axis=0)
+    return np.array([x0 + lo[0], y0 + lo[1], hi[0] - lo[0], hi[1] - lo[1]], np.int32), float(
+        areas.sum()
+    )
+
+
+def divide_regions(
+    camera: CameraModel,
+    contours: list[np.ndarray],
+    boxes_px: np.ndarray,
+    areas_px: np.ndarray,
+    features: np.ndarray,
+    valid: np.ndarray,
+    params: DivisionParams = DivisionParams(),
+) -> Division:
+    """Divide candidate regions into object + light spot; features recomputed for the objects.
+
+    Inputs are aligned per region: OpenCV contours (frame coordinates), boxes
+    (x, y, w, h), contour areas, and ``region_features`` rows and validity.
+    Regions that are not divided pass through unchanged.
+    """
+    boxes = np.asarray(boxes_px, np.int32).reshape(-1, 4)
+    areas = np.asarray(areas_px, np.float64).reshape(-1)
+    n = len(boxes)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        extent = areas / np.maximum(boxes[:, 2] * boxes[:, 3], 1)
+        candidate = valid & ((extent < params.max_extent) | (features[:, 2] > params.max_area_m2))
+    divided = np.zeros(n, bool)
+    if not candidate.any():
+        return Division(boxes, areas, features, valid, divided, np.zeros((0, 4), np.int32))
+    out_boxes, out_areas, out_feats = boxes.copy(), areas.copy(), features.copy()
+    spots: list[np.ndarray] = []
+    for i in np.flatnonzero(candidate):
+        x, y, w, h = (int(v) for v in boxes[i])
+        roi = np.zeros((h, w), np.uint8)
+        cv2.drawContours(roi, contours, int(i), 1, thickness=cv2.FILLED, offset=(-x, -y))
+        parts = split_object_and_spot(roi, params)
+        if parts is None:
+            continue
+        body = _part_box_and_area(parts[0], x, y)
+        spot = _part_box_and_area(parts[1], x, y)
+        if body is None or spot is None:
+            continue
+        part_feats, part_valid = region_features(
+            camera, np.stack([body[0], spot[0]]), np.array([body[1], spot[1]])
+        )
+        if not part_valid.all():
+            continue
+        spot_w_m, spot_h_m = part_feats[1, 0], part_feats[1, 1]
+        body_extent = body[1] / max(int(body[0][2]) * int(body[0][3]), 1)
+        ratio_whole = features[i, 1] / features[i, 0]
+        ratio_body = part_feats[0, 1] / part_feats[0, 0]
+        if (
+            spot_h_m > params.max_spot_height_to_width * spot_w_m
+            or body_extent <= extent[i]
+            or ratio_body <= ratio_whole
+        ):
+            continue
+        out_boxes[i], out_areas[i], out_feats[i] = body[0], body[1], part_feats[0]
+        divided[i] = True
+        spots.append(spot[0])
+    return Division(
+        boxes_px=out_boxes,
+        areas_px=out_areas,
+        features=out_feats,
+        valid=valid,
+        divided=divided,
+        spot_boxes_px=np.array(spots, np.int32).reshape(-1, 4),
+    )
