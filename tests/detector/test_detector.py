@@ -1,0 +1,218 @@
+"""The detector end to end on synthetic clips drawn with the shared 3D shapes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from sklearn.linear_model import LogisticRegression
+
+from detector.camera import CameraModel
+from detector.classifier import CLASSES, default_model
+from detector.detector import Detection, Detector, numpy_predict_proba
+from detector.shapes import pedestrian_shape, silhouette_mask
+
+H_PX, W_PX = 240, 320
+FPS = 15.0
+WALK_MPS = 1.4
+
+
+def scene_b(**overrides) -> CameraModel:
+    """The paper's scene B camera (Table 2): 3.1 m, 22 deg, 320 x 240, f 0.73 mm, 0.7 x 0.52 mm sensor."""
+    params = dict(
+        height_m=3.1,
+        tilt_deg=22.0,
+        focal_mm=0.73,
+        sensor_w_mm=0.7,
+        sensor_h_mm=0.52,
+        width_px=W_PX,
+        height_px=H_PX,
+    )
+    return CameraModel(**{**params, **overrides})
+
+
+@pytest.fixture(scope="module")
+def model():
+    return default_model()
+
+
+class Clip:
+    """A static IR-like background (brighter near the emitter, at the bottom) plus bright walkers."""
+
+    def __init__(self, camera: CameraModel, seed: int = 0) -> None:
+        self.camera = camera
+        self.rng = np.random.default_rng(seed)
+        rows = np.linspace(0.0, 1.0, H_PX)[:, None]
+        self.background = 25.0 + 30.0 * rows + self.rng.normal(0, 2, (H_PX, W_PX))
+
+    def frame(self, shapes=(), level_dn: float = 150.0) -> np.ndarray:
+        img = self.background + self.rng.normal(0, 3.0, (H_PX, W_PX))
+        for shape in shapes:
+            sil = silhouette_mask(self.camera, shape)
+            if sil is None:
+                continue
+            x0, y0 = sil.offset_px
+            h, w = sil.mask.shape
+            roi = img[y0 : y0 + h, x0 : x0 + w]
+            roi[sil.mask > 0] = level_dn + self.rng.normal(0, 3.0, int(np.count_nonzero(sil.mask)))
+        return np.clip(img, 0, 255).astype(np.uint8)
+
+    def warm_up(self, detector: Detector, n: int = 120) -> None:
+        for _ in range(n):
+            assert detector.process(self.frame()) == []
+
+
+def walker(forward_m: float, lateral_m: float, t_s: float, heading_rad: float = math.pi / 2):
+    """A 1.75 m pedestrian at forward distance ``forward_m`` walking at 1.4 m/s (y grows with t)."""
+    dy = WALK_MPS * t_s * math.sin(heading_rad)
+    dx = WALK_MPS * t_s * math.cos(heading_rad)
+    return pedestrian_shape(
+        forward_m + dx, lateral_m + dy, heading_rad, 0.5, 1.75, 0.7, 2 * math.pi * 0.9 * t_s
+    )
+
+
+def test_walking_pedestrian_is_detected_at_its_distance_as_a_pedestrian(model):
+    cam = scene_b()
+    clip = Clip(cam, seed=1)
+    det = Detector(cam, model=model)
+    clip.warm_up(det)
+    forward_m = 10.0
+    n_frames = 45
+    good, ids = 0, []
+    for k in range(n_frames):
+        detections = det.process(clip.frame([walker(forward_m, -2.5, k / FPS)]))
+        assert all(isinstance(d, Detection) for d in detections)
+        targets = [d for d in detections if d.p_target >= 0.5]
+        if len(detections) == 1 and len(targets) == 1:
+            d = targets[0]
+            ids.append(d.track_id)
+            if abs(d.features[3] - forward_m) <= 0.1 * forward_m and d.cls == "pedestrian":
+                good += 1
+            assert d.probabilities.shape == (len(CLASSES),)
+            assert d.p_target == pytest.approx(1.0 - d.probabilities[CLASSES.index("noise")])
+            assert d.features[4] == cam.tilt_deg and d.features[5] == cam.height_m
+    assert good >= 0.8 * n_frames
+    # one object, one track
+    assert len(set(ids)) == 1
+    assert det.tracker.is_confirmed(ids[0])
+    assert det.is_target(detections)
+
+
+def test_border_regions_and_far_regions_are_not_returned(model):
+    cam = scene_b()
+    clip = Clip(cam, seed=2)
+    det = Detector(cam, model=model, max_distance_m=25.0)
+    clip.warm_up(det)
+    # entering at the right edge of the frame: segmented, flagged, not classified
+    for k in range(4):
+        detections = det.process(clip.frame([walker(10.0, -4.9, k / FPS)]))
+    assert len(det.last_regions) >= 1 and det.last_regions.touches_border.all()
+    assert detections == []
+
+    # a pedestrian 22 m away is beyond a 20 m limit and within the paper's 25 m
+    distances = {}
+    for limit_m in (20.0, 25.0):
+        clip = Clip(cam, seed=3)
+        det = Detector(cam, model=model, max_distance_m=limit_m)
+        clip.warm_up(det)
+        found = [det.process(clip.frame([walker(22.0, 0.0, k / FPS)])) for k in range(8)]
+        assert all(len(d) <= 1 for d in found)
+        distances[limit_m] = [d[0].features[3] for d in found if d]
+    assert distances[20.0] == []
+    assert len(distances[25.0]) >= 6 and all(abs(d - 22.0) < 2.2 for d in distances[25.0])
+
+
+def test_regions_without_a_ground_point_are_not_returned(model):
+    # tilt 5 deg puts the horizon at row ~90; a bright thing moving above it has no distance
+    cam = scene_b(tilt_deg=5.0)
+    assert 60 < cam.horizon_row_px < 120
+    clip = Clip(cam, seed=4)
+    det = Detector(cam, model=model)
+    clip.warm_up(det, n=40)
+    for k in range(4):
+        img = clip.frame()
+        img[20:60, 60 + 10 * k : 90 + 10 * k] = 200
+        detections = det.process(img)
+    assert len(det.last_regions) == 1 and not det.last_regions.touches_border[0]
+    assert detections == []
+
+
+def test_reset_background_after_a_lamp_switch(model):
+    cam = scene_b()
+    clip = Clip(cam, seed=5)
+    det = Detector(cam, model=model)
+    clip.warm_up(det)
+    clip.background *= 2.0  # the lamp in view switches on
+    det.reset_background()
+    for _ in range(5):
+        assert det.process(clip.frame()) == []
+    assert det.last_regions.foreground_fraction < 0.01
+
+
+def test_numpy_probabilities_equal_the_models_own(model):
+    cam = scene_b()
+    fast = numpy_predict_proba(model, cam)
+    assert fast is not None
+    rng = np.random.default_rng(0)
+    X = np.column_stack(
+        [
+            rng.uniform(0.1, 5, 500),
+            rng.uniform(0.1, 3, 500),
+            rng.uniform(0.01, 10, 500),
+            rng.uniform(2, 30, 500),
+            np.full(500, 22.0),
+            np.full(500, 3.1),
+        ]
+    )
+    np.testing.assert_allclose(fast(X), model.predict_proba(X), atol=1e-9, rtol=0)
+
+
+def test_detector_falls_back_to_predict_proba_for_other_models():
+    # any fitted classifier with a 'noise' class works; its probabilities come from predict_proba
+    rng = np.random.default_rng(0)
+    X = np.column_stack(
+        [
+            rng.uniform(0.1, 3, 400),
+            rng.uniform(0.1, 2.5, 400),
+            rng.uniform(0.05, 5, 400),
+            rng.uniform(3, 25, 400),
+            np.full(400, 22.0),
+            np.full(400, 3.1),
+        ]
+    )
+    y = np.where(X[:, 1] > 1.2, "pedestrian", "noise")
+    other = LogisticRegression().fit(X, y)
+    cam = scene_b()
+    assert numpy_predict_proba(other, cam) is None
+    det = Detector(cam, model=other)
+    clip = Clip(cam, seed=6)
+    clip.warm_up(det, n=60)
+    detections = [det.process(clip.frame([walker(10.0, -1.0, k / FPS)])) for k in range(6)]
+    found = [d[0] for d in detections if len(d) == 1]
+    assert len(found) >= 4
+    for d in found:
+        np.testing.assert_allclose(d.probabilities, other.predict_proba(d.features[None])[0])
+        assert d.cls in ("noise", "pedestrian")
+
+
+def test_detector_rejects_bad_frames_and_settings(model):
+    cam = scene_b()
+    det = Detector(cam, model=model)
+    with pytest.raises(ValueError, match=r"shape \(240, 320\)"):
+        det.process(np.zeros((240, 424), np.uint8))
+    with pytest.raises(ValueError, match="uint8"):
+        det.process(np.zeros((240, 320), np.float32))
+    with pytest.raises(ValueError, match="max_distance_m"):
+        Detector(cam, model=model, max_distance_m=0.0)
+    with pytest.raises(ValueError, match="target_threshold"):
+        Detector(cam, model=model, target_threshold=1.5)
+
+
+def test_is_target_uses_the_threshold(model):
+    cam = scene_b()
+    det = Detector(cam, model=model, target_threshold=0.7)
+    make = lambda p: Detection((0, 0, 1, 1), np.zeros(6), "pedestrian", np.zeros(5), p, None)  # noqa: E731
+    assert not det.is_target([])
+    assert not det.is_target([make(0.69)])
+    assert det.is_target([make(0.69), make(0.7)])
