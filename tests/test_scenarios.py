@@ -1,0 +1,41 @@
+"""Every shipped scenario and camera file loads, validates and builds a usable street."""
+
+from pathlib import Path
+
+import pytest
+
+from citysim.config import load_scenario
+from citysim.street import build_street
+from detector.camera import CameraModel
+
+ROOT = Path(__file__).resolve().parents[1] / "scenarios"
+SCENARIOS = sorted(ROOT.glob("*.yaml"))
+CAMERAS = sorted((ROOT / "cameras").glob("*.yaml"))
+
+
+def test_there_are_scenarios():
+    assert SCENARIOS, f"no scenario files in {ROOT}"
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.name)
+def test_scenario_loads_and_builds(path):
+    scenario = load_scenario(path)
+    street = build_street(scenario)
+    assert len(street.lamps) == len(scenario.lamps.positions_x_m) >= 1
+    # zones tile the street exactly, in lamp order
+    assert street.lamps[0].zone_start_m == 0.0
+    assert street.lamps[-1].zone_end_m == pytest.approx(street.length_m)
+    for a, b in zip(street.lamps[:-1], street.lamps[1:], strict=True):
+        assert a.zone_end_m == b.zone_start_m
+        assert a.zone_start_m <= a.x_m <= a.zone_end_m
+    for lamp in street.lamps:
+        cam = lamp.camera
+        assert (cam.x_m, cam.y_m) == (lamp.x_m, lamp.y_m)
+        assert cam.bottom_row_depression_deg > 0  # sees the ground
+    assert scenario.controllers
+
+
+@pytest.mark.parametrize("path", CAMERAS, ids=lambda p: p.name)
+def test_camera_file_loads(path):
+    cam = CameraModel.from_yaml(path)
+    assert cam.bottom_row_depression_deg > 0
