@@ -26,6 +26,7 @@ Agents entirely hidden or out of view are not reported.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
@@ -34,15 +35,16 @@ import numpy as np
 
 from citysim import render_light as light
 from citysim.agents import AgentState
-from citysim.render_agents import AgentLighting, AgentPainter, DrawnAgent
+from citysim.render_agents import AGENT_MODELS, AgentLighting, AgentPainter, DrawnAgent
 from citysim.render_background import ShadingInputs, StaticScene
 from citysim.render_beams import (
     BEAMS,
     LAMP_HEAD_GLARE,
     LAMP_HEAD_SIZE_M,
-    add_ground_spot,
+    add_ground_spots,
     agent_glare_sources,
     glare,
+    spot_extent_m,
 )
 from citysim.render_canvas import build_canvas
 from citysim.render_effects import Insects, SensorNoise, draw_rain
@@ -68,12 +70,12 @@ class RenderParams:
     """How the camera and the night look.
 
     ``ir_emitter_power``: radiance x m^2 the IR emitter gives a white surface
-    facing it (1.0 = full scale at 1 m; 60 makes a 0.25-reflectance road ~10 m
-    ahead of a 4 m pole read ~55 DN). ``ambient_light``: 0 night .. 1 day.
+    facing it (1.0 = full scale at 1 m; 100 makes a 0.25-reflectance road 10 m
+    ahead of a 4 m pole read ~70 DN and a walker there ~190 DN). ``ambient_light``: 0 night .. 1 day.
     ``wind_mps`` drives the crowns' sway (an addition to the contract, with a default).
     """
 
-    ir_emitter_power: float = 60.0
+    ir_emitter_power: float = 80.0
     ambient_light: float = 0.0
     sensor_noise_std_dn: float = 3.0
     exposure_ms: float = 30.0
@@ -143,6 +145,9 @@ class CameraRenderer:
         self.scene = StaticScene(
             self.canvas, street, shading, rng, params.branch_sway, params.wind_mps
         )
+        self._heads_in_view = self.canvas.spheres_in_view(
+            self.lamp_positions_m, np.full(len(self.lamp_positions_m), 1.0)
+        )
         self.painter = AgentPainter(self.canvas, params.exposure_ms, params.motion_blur)
         self.noise = (
             SensorNoise(rng, camera.height_px, camera.width_px, params.sensor_noise_std_dn)
@@ -161,20 +166,52 @@ class CameraRenderer:
             return np.zeros_like(levels)
         return np.clip(np.nan_to_num(levels, nan=0.0), 0.0, 1.0)
 
+    def _in_view(self, agents: list[AgentState]) -> tuple[list[AgentState], list[AgentState]]:
+        """The agents that may show in this camera (a street holds many more), and the lit
+        agents whose light spot may show. Every agent's class is checked, seen or not."""
+        if not agents:
+            return [], []
+        for a in agents:
+            if a.cls not in AGENT_MODELS:
+                raise ValueError(
+                    f"AgentState {a.object_id}: cls {a.cls!r} cannot be rendered; valid: {sorted(AGENT_MODELS)}"
+                )
+        pos = np.array(
+            [[a.x_m, a.y_m, 0.5 * a.height_m, a.length_m, a.width_m, a.height_m] for a in agents]
+        )
+        radius = 0.5 * np.linalg.norm(pos[:, 3:], axis=1) + 1.0  # + members' spread, walkers' limbs
+        seen = self.canvas.spheres_in_view(pos[:, :3], radius)
+        lit = [(a, BEAMS[a.cls]) for a in agents if a.light_on and a.cls in BEAMS]
+        spots = []
+        if lit:
+            centre, reach = [], []
+            for a, spec in lit:
+                f_far, half_w = spot_extent_m(spec)
+                mid = 0.5 * (a.length_m + f_far)
+                centre.append(
+                    [
+                        a.x_m + mid * math.cos(a.heading_rad),
+                        a.y_m + mid * math.sin(a.heading_rad),
+                        0.0,
+                    ]
+                )
+                reach.append(math.hypot(0.5 * f_far + a.length_m, half_w))
+            shown = self.canvas.spheres_in_view(np.array(centre), np.array(reach))
+            spots = [a for (a, _), ok in zip(lit, shown, strict=True) if ok]
+        return [a for a, ok in zip(agents, seen, strict=True) if ok], spots
+
     def render(
         self, t_s: float, agents: Sequence[AgentState], lamp_levels: Sequence[float]
     ) -> RenderedFrame:
         """The frame at time ``t_s`` (s) with ``agents`` and each street lamp at ``lamp_levels`` (0..1)."""
         p = self.params
         levels = self._levels(lamp_levels)
-        agents = list(agents)
+        agents, lit = self._in_view(list(agents))
         img, depth = self.scene.compose(t_s, levels)
 
         spot_gain = 1.0 - p.ambient_light
-        for agent in agents:
-            spec = BEAMS.get(agent.cls)
-            if agent.light_on and spec is not None and spot_gain > 0.0:
-                add_ground_spot(self.scene, img, agent, spec, spot_gain)
+        if spot_gain > 0.0:
+            add_ground_spots(self.scene, img, lit, spot_gain)
 
         on = levels > 0.0
         lighting = AgentLighting(
@@ -185,10 +222,11 @@ class CameraRenderer:
 
         wet = p.rain_drops_per_frame > 0
         pts, power, size = agent_glare_sources(self.canvas, agents, p.ambient_light)
-        if on.any():
-            pts = np.concatenate([pts, self.lamp_positions_m[on]])
-            power = np.concatenate([power, LAMP_HEAD_GLARE * levels[on]])
-            size = np.concatenate([size, np.full(int(on.sum()), LAMP_HEAD_SIZE_M)])
+        heads = on & self._heads_in_view
+        if heads.any():
+            pts = np.concatenate([pts, self.lamp_positions_m[heads]])
+            power = np.concatenate([power, LAMP_HEAD_GLARE * levels[heads]])
+            size = np.concatenate([size, np.full(int(heads.sum()), LAMP_HEAD_SIZE_M)])
         glare(self.canvas, img, depth, pts, power, size, wet)
         exposure_s = p.exposure_ms / 1000.0
         draw_rain(
@@ -216,16 +254,18 @@ class CameraRenderer:
         fw, fh = self.camera.width_px, self.camera.height_px
         xy = np.array([[a.x_m, a.y_m] for a in agents])
         forward_m = self.camera.forward_and_lateral_m(xy)[:, 0]
-        # one remap of the whole label image beats many small ones once a few agents are in view
-        whole = self.canvas.to_frame(labels, nearest=True) if len(drawn) > 3 else None
+        drawn = sorted(drawn, key=lambda d: d.index)
+        boxes = [self.canvas.frame_box(d.roi) for d in drawn]
+        # a few agents: remap their boxes one by one; more: one remap of the whole label image
+        whole = self.canvas.to_frame(labels, nearest=True) if len(drawn) > 2 else None
+        if labels.dtype == np.uint8:
+            counts = cv2.calcHist([labels], [0], None, [256], [0, 256]).ravel()
+        else:
+            counts = np.bincount(labels.ravel(), minlength=len(agents) + 1)
         out = []
-        for d in sorted(drawn, key=lambda d: d.index):
-            x0, y0, x1, y1 = d.roi
-            visible_px = cv2.countNonZero(cv2.compare(labels[y0:y1, x0:x1], d.label, cv2.CMP_EQ))
-            if visible_px == 0:
-                continue
-            box = self.canvas.frame_box(d.roi)
-            if box is None:
+        for d, box in zip(drawn, boxes, strict=True):
+            visible_px = int(counts[d.label])
+            if box is None or visible_px == 0:
                 continue
             if whole is None:
                 frame_labels = self.canvas.to_frame_box(labels, box)

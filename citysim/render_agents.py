@@ -263,6 +263,7 @@ class AgentPainter:
         self.motion_blur = motion_blur and exposure_ms > 0.0
         # part indices of the agent being drawn; only its box is used and it is cleared after use
         self._index = np.zeros(canvas.shape, np.uint8)
+        self._lut = np.zeros(256, np.float32)  # part number -> radiance, zero between uses
 
     def paint(
         self,
@@ -283,8 +284,10 @@ class AgentPainter:
         radiance = part_radiance(self.canvas, centres, rho, lighting).astype(np.float32)
         part_dist = np.linalg.norm(centres - cam.position_m, axis=1)
         cam_pts = cam.world_to_cam(corners.reshape(-1, 3)).reshape(corners.shape)
-        # the common case - every vertex in front of the camera - is projected in one go
+        # the common case - every vertex in front of the camera - is projected in one go;
+        # agents wholly behind the camera are dropped, the few straddling it are clipped
         in_front = np.minimum.reduceat(cam_pts[..., 2].min(axis=1), starts[:-1]) >= Z_NEAR_M
+        behind = np.maximum.reduceat(cam_pts[..., 2].max(axis=1), starts[:-1]) < Z_NEAR_M
         uv = self.canvas.cam_to_canvas(cam_pts.reshape(-1, 3)).reshape(len(corners), -1, 2)
         with np.errstate(invalid="ignore"):
             fixed = np.rint(np.clip(uv, -1e6, 1e6) * (1 << SUBPIXEL_BITS)).astype(np.int32)
@@ -297,6 +300,8 @@ class AgentPainter:
         motion = self._image_motion(agents, anchors)
         drawn: list[DrawnAgent] = []
         for i in np.argsort(-agent_dist, kind="stable"):
+            if behind[i]:
+                continue
             parts = order[starts[i] : starts[i + 1]]
             if in_front[i]:
                 polys = [fixed[k] for k in parts]
@@ -382,18 +387,20 @@ class AgentPainter:
 
         # fill parts far to near with their 1-based number: the nearest part wins each pixel;
         # the vertices lie in [x0, x1) x [y0, y1) or off the canvas, so only that box is touched
-        for poly, k in zip(polys, part_numbers, strict=True):
+        parts_buf = self._index
+        for poly, k in zip(polys, part_numbers.tolist(), strict=True):
             if len(poly):
                 cv2.fillConvexPoly(
-                    self._index, cv2.convexHull(poly), int(k) + 1, cv2.LINE_8, SUBPIXEL_BITS
+                    parts_buf, cv2.convexHull(poly), k + 1, cv2.LINE_8, SUBPIXEL_BITS
                 )
         index_buf = self._index[y0:y1, x0:x1]
         silhouette_px = cv2.countNonZero(index_buf)
         if silhouette_px == 0:
             return None
-        lut = np.zeros(256, np.float32)
+        lut = self._lut
         lut[part_numbers + 1] = radiance
         value = cv2.LUT(index_buf, lut)  # premultiplied radiance
+        lut[part_numbers + 1] = 0.0
         coverage = cv2.LUT(index_buf, _COVERAGE_LUT)
         index_buf.fill(0)
         if blur:

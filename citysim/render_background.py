@@ -38,6 +38,8 @@ from citysim.street import Street
 POOL_MIN_RADIANCE = 2e-5
 #: Crown displacement per unit wind speed, m per (m/s).
 SWAY_M_PER_MPS = 0.025
+#: Crowns whose sway moves them less than this in the image (px) are drawn still.
+SWAY_MIN_PX = 0.4
 #: Leaf texture: crowns are patchy, not painted boxes.
 LEAF_TEXTURE_AMPLITUDE = 0.3
 FAR_DEPTH_M = 1e9
@@ -148,6 +150,24 @@ def _cast_solids(
     return depth, normals, rho
 
 
+def _draw_sway(rng: np.random.Generator) -> tuple[float, float, tuple[float, float]]:
+    """One crown's wind: direction (rad from +x), frequency (Hz) and two phases (rad)."""
+    angle = float(rng.uniform(-0.4, 0.4))
+    freq_hz = float(rng.uniform(0.25, 0.6))
+    return angle, freq_hz, (float(rng.uniform(0, 2 * math.pi)), float(rng.uniform(0, 2 * math.pi)))
+
+
+def _sway_px(canvas: Canvas, crown: Ellipsoid, amplitude_m: float) -> float:
+    """Largest image motion (px) of the crown's centre when it sways ``amplitude_m``; 0 if unseen."""
+    if amplitude_m <= 0.0:
+        return 0.0
+    c = crown.centre_m
+    uv = canvas.project(np.array([c, c + [amplitude_m, 0.0, 0.0], c + [0.0, amplitude_m, 0.0]]))
+    if not np.all(np.isfinite(uv)):
+        return 0.0
+    return float(np.abs(uv[1:] - uv[0]).max())
+
+
 class StaticScene:
     """Everything about one camera's view that does not move (see module docstring)."""
 
@@ -166,9 +186,13 @@ class StaticScene:
         h, w = canvas.shape
         n = h * w
         parts = scenery_parts(street, (cam.x_m, cam.y_m))
-        sway = sway and wind_mps > 0.0
-        solids = parts.solids if sway else parts.solids + parts.crowns
-        depth, normals, rho = _cast_solids(canvas, solids, n)
+        amplitude_m = SWAY_M_PER_MPS * wind_mps if sway else 0.0
+        # every crown draws its sway whether or not it moves in this view, so the random
+        # stream does not depend on what this camera sees
+        sway_draws = [_draw_sway(rng) for _ in parts.crowns]
+        swaying = [_sway_px(canvas, c, amplitude_m) >= SWAY_MIN_PX for c in parts.crowns]
+        baked = tuple(c for c, moves in zip(parts.crowns, swaying, strict=True) if not moves)
+        depth, normals, rho = _cast_solids(canvas, parts.solids + baked, n)
         self.occluder_depth = (
             np.where(np.isfinite(depth), depth, FAR_DEPTH_M).astype(np.float32).reshape(h, w)
         )
@@ -182,6 +206,14 @@ class StaticScene:
         normals[ground] = (0.0, 0.0, 1.0)
         rho[ground] = ground_reflectance(street, gpts[:, 0], gpts[:, 1])
 
+        # ground (x, y, 1) -> canvas pixel (homogeneous): K [r1 r2 t], shifted to the canvas
+        rot = cam.rotation_world_to_cam
+        shift = np.array([[1.0, 0.0, -canvas.x0_px], [0.0, 1.0, -canvas.y0_px], [0.0, 0.0, 1.0]])
+        self.ground_to_canvas = (
+            shift
+            @ cam.intrinsic_matrix
+            @ np.column_stack([rot[:, 0], rot[:, 1], -rot @ cam.position_m])
+        )
         # camera-frame depth of the nearest ground the camera sees: carried-light spots are clipped there
         ground_cam_z = t_ground[ground] * canvas.cos_off_axis.reshape(-1)[ground]
         self.nearest_ground_cam_z_m = float(ground_cam_z.min()) if ground.any() else FAR_DEPTH_M
@@ -200,10 +232,14 @@ class StaticScene:
         base[hit] = base_hit
         self.base = base.reshape(h, w)
         self.pools = self._pools(hit, pools_hit, n)
-        self.crowns = (
-            tuple(self._crown_sprite(c, rng, wind_mps) for c in parts.crowns) if sway else ()
+        sprites = (
+            self._crown_sprite(c, amplitude_m, draw)
+            for c, draw, moves in zip(parts.crowns, sway_draws, swaying, strict=True)
+            if moves
         )
-        self.crowns = tuple(c for c in self.crowns if c is not None)
+        self.crowns = tuple(c for c in sprites if c is not None)
+        self._lit_key: tuple[float, ...] | None = None
+        self._lit = self.base
 
     # ------------------------------------------------------------------ build
     def _pools(self, hit: np.ndarray, pools_hit: np.ndarray, n: int) -> tuple[LampPool, ...]:
@@ -223,17 +259,13 @@ class StaticScene:
         return tuple(out)
 
     def _crown_sprite(
-        self, crown: Ellipsoid, rng: np.random.Generator, wind_mps: float
+        self, crown: Ellipsoid, amplitude_m: float, draw: tuple[float, float, tuple[float, float]]
     ) -> CrownSprite | None:
         canvas = self.canvas
-        amplitude_m = SWAY_M_PER_MPS * wind_mps
+        angle, freq_hz, phases = draw
         grown = Ellipsoid(crown.centre_m, crown.radii_m + amplitude_m, crown.ir_reflectance)
         uv = canvas_hull_px(canvas, grown.corners_m())
         roi = None if uv is None else roi_of(uv, canvas, margin_px=2)
-        # draw parameters whether or not the crown is in view, so the rng stream does not depend on the view
-        angle = rng.uniform(-0.4, 0.4)
-        freq_hz = rng.uniform(0.25, 0.6)
-        phases = (float(rng.uniform(0, 2 * math.pi)), float(rng.uniform(0, 2 * math.pi)))
         if roi is None:
             return None
         idx = _roi_indices(roi, canvas.width_px)
@@ -284,13 +316,16 @@ class StaticScene:
     def compose(self, t_s: float, lamp_levels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """This frame's background: (radiance (H, W) float32, a fresh array; depth of standing
         surfaces (H, W) float32, the cached array unless crowns moved - do not write to it)."""
-        img = self.base.copy()
-        for pool in self.pools:
-            level = float(lamp_levels[pool.lamp_index])
-            if level > 0.0:
-                x0, y0, x1, y1 = pool.roi
-                view = img[y0:y1, x0:x1]
-                cv2.scaleAdd(pool.radiance, level, view, dst=view)
+        key = tuple(float(lamp_levels[pool.lamp_index]) for pool in self.pools)
+        if key != self._lit_key:  # lamps change level now and then: re-light only then
+            lit = self.base.copy()
+            for pool, level in zip(self.pools, key, strict=True):
+                if level > 0.0:
+                    x0, y0, x1, y1 = pool.roi
+                    view = lit[y0:y1, x0:x1]
+                    cv2.scaleAdd(pool.radiance, level, view, dst=view)
+            self._lit, self._lit_key = lit, key
+        img = self._lit.copy()
         if not self.crowns:
             return img, self.occluder_depth
         depth = self.occluder_depth.copy()

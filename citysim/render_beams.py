@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, lru_cache
 
 import cv2
 import numpy as np
@@ -81,17 +81,17 @@ def _lamp_points(agent: AgentState, spec: BeamSpec) -> np.ndarray:
 SPOT_TEXELS_FORWARD, SPOT_TEXELS_LATERAL = 96, 48
 
 
-def _spot_extent_m(spec: BeamSpec) -> tuple[float, float]:
+def spot_extent_m(spec: BeamSpec) -> tuple[float, float]:
     """(forward reach, half width) of the ground box that holds the spot, m."""
     f_far = spec.centre_m + 2.0 * spec.sigma_forward_m
-    return f_far, 2.0 * (spec.sigma_lateral_m + spec.spread_per_m * f_far)
+    return f_far, 1.6 * (spec.sigma_lateral_m + spec.spread_per_m * f_far)
 
 
 @cache
 def spot_texture(spec: BeamSpec) -> np.ndarray:
     """The spot's irradiance (full-scale units) on a ground grid: rows run forward from the
     lamp (0 .. reach), columns across it (-half width .. +half width), texel centres on the grid."""
-    f_far, half_w = _spot_extent_m(spec)
+    f_far, half_w = spot_extent_m(spec)
     f = (np.arange(SPOT_TEXELS_FORWARD) + 0.5) * (f_far / SPOT_TEXELS_FORWARD)
     lat = (np.arange(SPOT_TEXELS_LATERAL) + 0.5) * (2.0 * half_w / SPOT_TEXELS_LATERAL) - half_w
     width = spec.sigma_lateral_m + spec.spread_per_m * f
@@ -102,86 +102,151 @@ def spot_texture(spec: BeamSpec) -> np.ndarray:
     return (spec.peak_irradiance * e).astype(np.float32)
 
 
-def add_ground_spot(
-    scene: StaticScene, img: np.ndarray, agent: AgentState, spec: BeamSpec, gain: float
-) -> None:
-    """Add the agent's light spot to the visible ground of ``img`` (radiance).
+#: Spots are accumulated on a grid this many times coarser than the canvas (they are smooth).
+SPOT_GRID = 4
 
-    The canvas is an ideal pinhole image, so ground plane -> canvas is a
-    homography: the precomputed spot texture is warped onto the canvas with
-    ``cv2.warpPerspective`` and weighted by each pixel's ground reflectance
-    (zero where the pixel does not see the ground).
-    """
+
+def _spots_to_canvas(
+    scene: StaticScene, agents: list[AgentState]
+) -> list[tuple[BeamSpec, np.ndarray, tuple] | None]:
+    """Per lit agent: (its beam, texel -> canvas homography, canvas box (x0, y0, x1, y1)), or
+    None when its spot is out of view. Vectorised over the agents."""
     canvas = scene.canvas
     cam = canvas.camera
-    origin = _lamp_points(agent, spec)[:, :2].mean(axis=0)
-    fwd = np.array([math.cos(agent.heading_rad), math.sin(agent.heading_rad)])
-    left = np.array([-fwd[1], fwd[0]])
-    f_far, half_w = _spot_extent_m(spec)
-    # texel (col, row) -> ground (x, y, 1)
+    specs = [BEAMS[a.cls] for a in agents]
+    n = len(agents)
+    heading = np.array([a.heading_rad for a in agents])
+    c, s = np.cos(heading), np.sin(heading)
+    origin = np.array(
+        [_lamp_points(a, spec)[:, :2].mean(axis=0) for a, spec in zip(agents, specs, strict=True)]
+    )
+    extent = np.array([spot_extent_m(spec) for spec in specs])
+    f_far, half_w = extent[:, 0], extent[:, 1]
+    # texel (col, row) -> ground (x, y, 1): columns run to the left of the heading, rows forward
     df, dl = f_far / SPOT_TEXELS_FORWARD, 2.0 * half_w / SPOT_TEXELS_LATERAL
-    start = origin - half_w * left + 0.5 * df * fwd + 0.5 * dl * left
-    tex_to_ground = np.array(
-        [
-            [dl * left[0], df * fwd[0], start[0]],
-            [dl * left[1], df * fwd[1], start[1]],
-            [0.0, 0.0, 1.0],
-        ]
+    tex_to_ground = np.zeros((n, 3, 3))
+    tex_to_ground[:, 0] = np.column_stack(
+        [-dl * s, df * c, origin[:, 0] + half_w * s + 0.5 * (df * c - dl * s)]
     )
-    rot = cam.rotation_world_to_cam
-    ground_to_cam = np.column_stack([rot[:, 0], rot[:, 1], -rot @ cam.position_m])
-    shift = np.array([[1.0, 0.0, -canvas.x0_px], [0.0, 1.0, -canvas.y0_px], [0.0, 0.0, 1.0]])
-    tex_to_canvas = shift @ cam.intrinsic_matrix @ ground_to_cam @ tex_to_ground
+    tex_to_ground[:, 1] = np.column_stack(
+        [dl * c, df * s, origin[:, 1] - half_w * c + 0.5 * (df * s + dl * c)]
+    )
+    tex_to_ground[:, 2, 2] = 1.0
+    box_world = np.einsum("nij,kj->nki", tex_to_ground, _SPOT_BOX_TEX)  # (n, 4, 3)
+    box_world[..., 2] = 0.0
+    box_cam = cam.world_to_cam(box_world.reshape(-1, 3)).reshape(n, 4, 3)
+    # the spot's ground box is cut where it leaves the camera's view of the ground (behind or under it)
+    z_cut = 0.8 * scene.nearest_ground_cam_z_m
+    out: list[tuple[BeamSpec, np.ndarray, tuple] | None] = []
+    for i in range(n):
+        pts = (
+            box_cam[i] if np.all(box_cam[i, :, 2] >= z_cut) else clip_solid_near(box_cam[i], z_cut)
+        )
+        roi = None if pts is None else roi_of(canvas.cam_to_canvas(pts), canvas)
+        out.append(
+            None if roi is None else (specs[i], scene.ground_to_canvas @ tex_to_ground[i], roi)
+        )
+    return out
 
-    # the spot's ground box, cut where it leaves the camera's view of the ground (behind it or under it)
-    box_tex = np.array(
-        [
-            [x, y, 1.0]
-            for x in (-0.5, SPOT_TEXELS_LATERAL - 0.5)
-            for y in (-0.5, SPOT_TEXELS_FORWARD - 0.5)
-        ]
-    )
-    box_world = np.column_stack([(box_tex @ tex_to_ground.T)[:, :2], np.zeros(4)])
-    near = clip_solid_near(cam.world_to_cam(box_world), 0.8 * scene.nearest_ground_cam_z_m)
-    if near is None:
+
+_SPOT_BOX_TEX = np.array(
+    [
+        [-0.5, -0.5, 1.0],
+        [-0.5, SPOT_TEXELS_FORWARD - 0.5, 1.0],
+        [SPOT_TEXELS_LATERAL - 0.5, -0.5, 1.0],
+        [SPOT_TEXELS_LATERAL - 0.5, SPOT_TEXELS_FORWARD - 0.5, 1.0],
+    ]
+)
+
+
+def add_ground_spots(
+    scene: StaticScene, img: np.ndarray, agents: list[AgentState], gain: float
+) -> None:
+    """Add the light spots of lit ``agents`` to the visible ground of ``img`` (radiance).
+
+    The canvas is an ideal pinhole image, so ground plane -> canvas is a
+    homography: each spot's precomputed texture is warped with
+    ``cv2.warpPerspective`` onto a coarse grid (spots are smooth), the grid is
+    scaled up once and weighted by each pixel's ground reflectance (zero where
+    the pixel does not see the ground).
+    """
+    if not agents:
         return
-    roi = roi_of(canvas.cam_to_canvas(near), canvas)
-    if roi is None:
+    canvas = scene.canvas
+    h, w = canvas.shape
+    g = SPOT_GRID
+    ch, cw = (h + g - 1) // g, (w + g - 1) // g
+    coarse = None
+    # canvas -> coarse grid with pixel centres aligned as cv2.resize(INTER_LINEAR) expects
+    to_coarse = np.array(
+        [[1.0 / g, 0.0, 0.5 / g - 0.5], [0.0, 1.0 / g, 0.5 / g - 0.5], [0.0, 0.0, 1.0]]
+    )
+    for found in _spots_to_canvas(scene, agents):
+        if found is None:
+            continue
+        spec, tex_to_canvas, (x0, y0, x1, y1) = found
+        cx0, cy0 = int(max((x0 + 0.5) / g - 1.5, 0)), int(max((y0 + 0.5) / g - 1.5, 0))
+        cx1, cy1 = (
+            min(math.ceil((x1 - 0.5) / g + 1.5), cw),
+            min(math.ceil((y1 - 0.5) / g + 1.5), ch),
+        )
+        if cx1 <= cx0 or cy1 <= cy0:
+            continue
+        to_roi = to_coarse @ tex_to_canvas
+        to_roi[0] -= cx0 * to_roi[2]
+        to_roi[1] -= cy0 * to_roi[2]
+        patch = cv2.warpPerspective(
+            spot_texture(spec),
+            to_roi,
+            (cx1 - cx0, cy1 - cy0),
+            flags=cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+        )
+        if coarse is None:
+            coarse = np.zeros((ch, cw), np.float32)
+        view = coarse[cy0:cy1, cx0:cx1]
+        cv2.add(view, patch, dst=view)
+    if coarse is None:
         return
-    x0, y0, x1, y1 = roi
-    rho = scene.ground_reflectance[y0:y1, x0:x1]
-    # the spot is smooth: warp it at half resolution (a quarter of the perspective divisions)
-    hw, hh = (x1 - x0 + 1) // 2, (y1 - y0 + 1) // 2
-    to_half = np.array(
-        [[0.5, 0.0, 0.5 * (0.5 - x0) - 0.5], [0.0, 0.5, 0.5 * (0.5 - y0) - 0.5], [0.0, 0.0, 1.0]]
+    e = cv2.resize(coarse, (g * cw, g * ch), interpolation=cv2.INTER_LINEAR)[:h, :w]
+    cv2.add(img, cv2.multiply(scene.ground_reflectance, e, scale=gain), dst=img)
+
+
+#: Blob widths are cached in steps of 1/BLOB_STEPS_PER_PX px; blobs sit on whole pixels.
+BLOB_STEPS_PER_PX = 4
+MAX_BLOB_SIGMA_PX = 12.0
+
+
+@lru_cache(maxsize=512)
+def _blob_stamp(sigma_steps: int) -> np.ndarray:
+    """A unit-peak glare blob: Gaussian core plus a halo HALO_SCALE times wider, centred."""
+    sigma = sigma_steps / BLOB_STEPS_PER_PX
+    r = int(math.ceil(3.0 * HALO_SCALE * sigma))
+    d2 = (np.arange(-r, r + 1, dtype=np.float64)[None, :] ** 2) + (
+        np.arange(-r, r + 1, dtype=np.float64)[:, None] ** 2
     )
-    half = cv2.warpPerspective(
-        spot_texture(spec),
-        to_half @ tex_to_canvas,
-        (hw, hh),
-        flags=cv2.INTER_LINEAR,
-        borderMode=cv2.BORDER_CONSTANT,
-    )
-    e = cv2.resize(half, (2 * hw, 2 * hh), interpolation=cv2.INTER_LINEAR)[: y1 - y0, : x1 - x0]
-    img[y0:y1, x0:x1] += gain * rho * e
+    core = -0.5 / sigma**2
+    stamp = np.exp(core * d2) + HALO_FRACTION * np.exp((core / HALO_SCALE**2) * d2)
+    stamp = stamp.astype(np.float32)
+    stamp.flags.writeable = False
+    return stamp
 
 
 def _blob(
     canvas: Canvas, img: np.ndarray, u: float, v: float, sigma_px: float, peak: float
 ) -> None:
-    """Add a glare blob: a Gaussian core of ``sigma_px`` and a faint halo three times wider."""
-    r = int(math.ceil(3.0 * HALO_SCALE * sigma_px))
-    x0, y0 = max(int(u) - r, 0), max(int(v) - r, 0)
-    x1, y1 = min(int(u) + r + 2, canvas.width_px), min(int(v) + r + 2, canvas.height_px)
+    """Add a glare blob of core width ``sigma_px`` and peak radiance ``peak`` at the pixel nearest (u, v)."""
+    sigma = min(sigma_px, MAX_BLOB_SIGMA_PX)
+    stamp = _blob_stamp(max(1, round(sigma * BLOB_STEPS_PER_PX)))
+    r = stamp.shape[0] // 2
+    cu, cv_ = int(round(u)), int(round(v))
+    x0, y0 = max(cu - r, 0), max(cv_ - r, 0)
+    x1, y1 = min(cu + r + 1, canvas.width_px), min(cv_ + r + 1, canvas.height_px)
     if x1 <= x0 or y1 <= y0:
         return
-    d2 = (np.arange(x0, x1, dtype=np.float32) - u)[None, :] ** 2 + (
-        np.arange(y0, y1, dtype=np.float32) - v
-    )[:, None] ** 2
-    core = -0.5 / sigma_px**2
-    g = np.exp(core * d2) + HALO_FRACTION * np.exp((core / HALO_SCALE**2) * d2)
+    part = stamp[y0 - (cv_ - r) : y1 - (cv_ - r), x0 - (cu - r) : x1 - (cu - r)]
     view = img[y0:y1, x0:x1]
-    cv2.scaleAdd(g.astype(np.float32, copy=False), float(peak), view, dst=view)
+    cv2.scaleAdd(part, float(peak), view, dst=view)
 
 
 def _streak(

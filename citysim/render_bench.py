@@ -80,7 +80,8 @@ def bench_agents(n: int, t_s: float, rng_seed: int = 7) -> list[AgentState]:
         cls = _CLASS_CYCLE[i % len(_CLASS_CYCLE)]
         length, width, height, speed, y = _SIZES[cls]
         direction = 1.0 if rng.random() < 0.5 else -1.0
-        x = 12.0 + rng.uniform(0.0, 28.0) + direction * speed * (t_s % 4.0)
+        # each agent shuttles through the view (x in 12..40 m), so all of them stay in the frame
+        x = 12.0 + (rng.uniform(0.0, 28.0) + direction * speed * t_s) % 28.0
         members = ()
         if cls == "group":
             members = (

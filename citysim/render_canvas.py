@@ -86,6 +86,23 @@ class Canvas:
             borderMode=cv2.BORDER_REPLICATE,
         )
 
+    def spheres_in_view(self, centres_m: np.ndarray, radii_m: np.ndarray) -> np.ndarray:
+        """(N,) bool: which spheres (world centres (N, 3), radii (N,)) may show on the canvas.
+
+        Conservative: a sphere is dropped only when it lies wholly outside one of
+        the canvas's four side planes or before the near plane.
+        """
+        cam = self.camera
+        p = cam.world_to_cam(centres_m)
+        a_l = (self.x0_px - 0.5 - cam.cx_px) / cam.fx_px
+        a_r = (self.x0_px + self.width_px - 0.5 - cam.cx_px) / cam.fx_px
+        b_t = (self.y0_px - 0.5 - cam.cy_px) / cam.fy_px
+        b_b = (self.y0_px + self.height_px - 0.5 - cam.cy_px) / cam.fy_px
+        normals = np.array([[1.0, 0.0, -a_l], [-1.0, 0.0, a_r], [0.0, 1.0, -b_t], [0.0, -1.0, b_b]])
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        inside = (p @ normals.T) >= -radii_m[:, None]
+        return np.all(inside, axis=1) & (p[:, 2] >= Z_NEAR_M - radii_m)
+
     def frame_box(self, roi: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
         """Frame box (x0, y0, x1, y1), exclusive ends, that holds everything of canvas box ``roi``."""
         x0, y0, x1, y1 = roi

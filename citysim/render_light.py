@@ -16,8 +16,11 @@ surface at distance ``r_m`` from the lens:
   far that the emitter stops mattering, hence the ``(1 - ambient)`` factor.
 * ``E_day = ambient * DAY_IRRADIANCE * (up-facing 1, vertical VERTICAL_DAY_FACTOR)``.
 * ``E_lamps``: each street lamp at ``level`` (0..1) is a point source at its
-  luminaire, isotropic over the lower hemisphere (fading to zero at the
-  horizontal): ``E = level * LAMP_POWER * cos_surface / d**2``.
+  luminaire with a street-light ("batwing") distribution: intensity
+  ``LAMP_POWER / cos(theta)**2`` from the nadir out to ``LAMP_SPREAD_DEG``,
+  which makes the road's illuminance fall only as ``cos(theta)`` (a broad,
+  even pool, as street lighting is designed to give), then cut off toward the
+  horizontal: ``E = level * I(theta) * cos_surface / d**2``.
 * ``E_night``: sky glow, so unlit surfaces are not pitch black.
 
 Conventions: world frame of DESIGN.md (m), unit normals, distances in metres.
@@ -30,7 +33,7 @@ import numpy as np
 
 #: Irradiance x m^2 of a street lamp at level 1 (full-scale units): under a
 #: 6 m pole a 0.25-reflectance road reads about 140 DN.
-LAMP_POWER = 45.0
+LAMP_POWER = 30.0
 #: Daylight irradiance on an up-facing surface (full-scale units).
 DAY_IRRADIANCE = 1.0
 #: Vertical surfaces get sky light and some sun, less than the ground.
@@ -40,10 +43,15 @@ NIGHT_IRRADIANCE = 0.004
 #: Radiance of the sky itself at night and in daylight.
 SKY_NIGHT = 0.003
 SKY_DAY = 0.55
+#: Angle from the nadir out to which the luminaire's intensity grows as 1/cos^2.
+LAMP_SPREAD_DEG = 65.0
 #: Cosine below which a lamp's light fades out toward the horizontal (full cut-off luminaire).
 LAMP_CUTOFF_COS = 0.15
 #: Emitter beam falls off as cos(off-axis angle) ** BEAM_EXPONENT.
 BEAM_EXPONENT = 2.0
+
+
+_SPREAD_COS = float(np.cos(np.radians(LAMP_SPREAD_DEG)))
 
 
 def emitter_irradiance(
@@ -91,6 +99,7 @@ def lamp_irradiance(
     d = np.sqrt(d2)
     cos_nadir = v[..., 2] / d  # angle from the lamp's downward axis
     fade = np.clip(cos_nadir / LAMP_CUTOFF_COS, 0.0, 1.0)
+    fade /= np.maximum(cos_nadir, _SPREAD_COS) ** 2
     if normals is None:
         cos_surface = 0.5 + 0.5 * np.clip(cos_nadir, 0.0, 1.0)
     else:

@@ -361,8 +361,9 @@ def test_bad_inputs_raise_errors_that_name_the_field() -> None:
     r = renderer()
     with pytest.raises(ValueError, match="lamp_levels"):
         r.render(0.0, [], [1.0])
-    with pytest.raises(ValueError, match="'dragon'"):
-        r.render(0.0, [AgentState(9, "dragon", 10.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0)], [0.0, 0.0])
+    for x_m in (10.0, -50.0):  # in view or behind the camera: a bad class is an error either way
+        with pytest.raises(ValueError, match="'dragon'"):
+            r.render(0.0, [AgentState(9, "dragon", x_m, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0)], [0.0, 0.0])
     with pytest.raises(ValueError, match=r"street\.scenery\[0\]\.kind"):
         renderer(
             street=make_street(scenery=(StaticObject("castle", 10.0, 9.0, 5.0, 5.0, 5.0, 0.3),))
