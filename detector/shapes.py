@@ -48,6 +48,7 @@ IR_REFLECTANCE = {
     "body": 0.6,
     "cabin": 0.25,
     "tail": 0.3,
+    "spot": 0.9,
 }
 
 
@@ -382,6 +383,37 @@ def animal_shape(
             lat = side * (w / 2 - leg_half)
             foot = (f_hip + sign * side * swing, lat, 0.0)
             parts.add(_slab(foot, (f_hip, lat, z_belly + 0.05 * h), 0.04 * length, leg_half), "leg")
+    return parts.place(x_m, y_m, heading_rad)
+
+
+def blob_shape(
+    x_m: float,
+    y_m: float,
+    heading_rad: float,
+    width_m: float,
+    height_m: float,
+    length_m: float,
+    z0_m: float = 0.0,
+) -> Shape:
+    """One box (a generic non-target blob: debris, foliage, an insect), bottom at ``z0_m``."""
+    parts = _Parts()
+    parts.add(
+        _box(-length_m / 2, length_m / 2, -width_m / 2, width_m / 2, z0_m, z0_m + height_m), "body"
+    )
+    return parts.place(x_m, y_m, heading_rad)
+
+
+def ground_spot_shape(
+    x_m: float, y_m: float, heading_rad: float, width_m: float, length_m: float
+) -> Shape:
+    """A light spot on the road (headlight, flashlight): a flat octagonal ellipse 1 cm above
+    the ground, ``length_m`` along the heading and ``width_m`` across it."""
+    ang = np.arange(8) * (math.pi / 4)
+    corners = np.column_stack(
+        [length_m / 2 * np.cos(ang), width_m / 2 * np.sin(ang), np.full(8, 0.01)]
+    )
+    parts = _Parts()
+    parts.add(corners, "spot")
     return parts.place(x_m, y_m, heading_rad)
 
 

@@ -1,0 +1,146 @@
+"""The dimensional classifier: held-out target/noise error rates, the shipped model,
+save/load, parameter checks and scikit-learn's estimator conventions."""
+
+from __future__ import annotations
+
+import joblib
+import numpy as np
+import pytest
+import sklearn
+from sklearn.metrics import confusion_matrix
+from sklearn.utils.estimator_checks import estimator_checks_generator
+
+from detector.classifier import (
+    CLASSES,
+    GENERAL_MODEL_PATH,
+    TARGET_CLASSES,
+    DimensionalClassifier,
+    ModelFileError,
+    default_model,
+    train_general_model,
+)
+from detector.training import make_training_samples, make_training_set
+
+
+@pytest.fixture(scope="module")
+def held_out():
+    """Synthetic features from a seed no model was trained on."""
+    return make_training_samples(400, np.random.default_rng(12345))
+
+
+@pytest.fixture(scope="module")
+def small_model() -> DimensionalClassifier:
+    X, y = make_training_set(60, np.random.default_rng(4))
+    return DimensionalClassifier().fit(X, y)
+
+
+def test_general_model_target_vs_noise_rates(held_out) -> None:
+    model = default_model()
+    p_target = model.predict_target_proba(held_out.X)
+    is_noise = held_out.y == "noise"
+    false_positive_rate = np.mean(p_target[is_noise] >= 0.5)
+    false_negative_rate = np.mean(p_target[~is_noise] < 0.5)
+    predicted = model.predict(held_out.X)
+    matrix = confusion_matrix(held_out.y, predicted, labels=list(CLASSES), normalize="true")
+    print("\nheld-out confusion matrix (rows: true, columns: predicted), classes", CLASSES)
+    print(np.array2string(matrix, precision=3, suppress_small=True))
+    print(f"target vs noise: FPR {false_positive_rate:.3f}  FNR {false_negative_rate:.3f}")
+    for kind in np.unique(held_out.kind[is_noise]):
+        print(
+            f"  noise kind {kind:14s} taken for a target: {np.mean(p_target[held_out.kind == kind] >= 0.5):.3f}"
+        )
+    assert false_positive_rate <= 0.05
+    assert false_negative_rate <= 0.10
+    # vehicles stand apart (paper section 5.4); every target class is mostly found as itself
+    assert matrix[4, 4] > 0.8
+    assert np.all(np.diag(matrix)[1:] > 0.5)
+
+
+def test_shipped_model_is_what_the_code_trains(held_out) -> None:
+    shipped = DimensionalClassifier.load(GENERAL_MODEL_PATH)
+    fresh = train_general_model(seed=0)
+    assert np.allclose(
+        shipped.predict_proba(held_out.X), fresh.predict_proba(held_out.X), atol=1e-6
+    )
+    assert default_model() is default_model()  # cached per process
+
+
+def test_probabilities_follow_classes_order(small_model, held_out) -> None:
+    assert tuple(small_model.classes_) == CLASSES and TARGET_CLASSES == CLASSES[1:]
+    proba = small_model.predict_proba(held_out.X[:50])
+    assert proba.shape == (50, 5) and np.allclose(proba.sum(axis=1), 1.0)
+    assert np.array_equal(
+        small_model.predict(held_out.X[:50]), np.array(CLASSES, dtype=object)[proba.argmax(axis=1)]
+    )
+    assert np.allclose(small_model.predict_target_proba(held_out.X[:50]), 1.0 - proba[:, 0])
+
+
+def test_missing_classes_keep_their_columns(held_out) -> None:
+    keep = np.isin(held_out.y, ["noise", "pedestrian", "vehicle"])
+    model = DimensionalClassifier().fit(held_out.X[keep], held_out.y[keep])
+    proba = model.predict_proba(held_out.X[:20])
+    assert tuple(model.classes_) == CLASSES
+    assert np.all(proba[:, [2, 3]] == 0.0) and np.allclose(proba.sum(axis=1), 1.0)
+
+
+def test_save_load_round_trip(small_model, held_out, tmp_path) -> None:
+    path = small_model.save(tmp_path / "sub" / "model.joblib")
+    loaded = DimensionalClassifier.load(path)
+    assert np.array_equal(loaded.predict_proba(held_out.X), small_model.predict_proba(held_out.X))
+    assert np.array_equal(loaded.predict(held_out.X), small_model.predict(held_out.X))
+
+
+def test_unusable_model_files_are_named(small_model, tmp_path) -> None:
+    missing = tmp_path / "nope.joblib"
+    with pytest.raises(ModelFileError, match=f"{missing}: model file not found"):
+        DimensionalClassifier.load(missing)
+    corrupt = tmp_path / "corrupt.joblib"
+    corrupt.write_bytes(b"\x80\x04 this is not a pickle")
+    with pytest.raises(ModelFileError, match=f"{corrupt}: not a readable model file"):
+        DimensionalClassifier.load(corrupt)
+    foreign = tmp_path / "foreign.joblib"
+    joblib.dump({"weights": [1, 2, 3]}, foreign)
+    with pytest.raises(ModelFileError, match=f"{foreign}: not a DimensionalClassifier file"):
+        DimensionalClassifier.load(foreign)
+    old = tmp_path / "old.joblib"
+    joblib.dump({"format": 1, "sklearn_version": "0.24.2", "model": small_model}, old)
+    with pytest.raises(
+        ModelFileError, match=f"{old}: written by scikit-learn 0.24.2, but {sklearn.__version__}"
+    ):
+        DimensionalClassifier.load(old)
+
+
+@pytest.mark.parametrize(
+    ("params", "message"),
+    [
+        ({"C": -1.0}, r"parameter C must be a finite float > 0, got -1.0"),
+        ({"C": float("inf")}, r"parameter C must be a finite float > 0, got inf"),
+        (
+            {"solver": "liblinear"},
+            r"parameter solver must be one of \['newton-cg'.*got 'liblinear'",
+        ),
+        ({"max_iter": 0}, r"parameter max_iter must be an integer >= 1, got 0"),
+    ],
+)
+def test_bad_parameters_are_named(params, message, held_out) -> None:
+    with pytest.raises(ValueError, match=message):
+        DimensionalClassifier(**params).fit(held_out.X[:100], held_out.y[:100])
+
+
+# Two of scikit-learn's checks exercise optional packages this project does not
+# install (pandas, the array API); every other check runs.
+_NEEDS_ABSENT_PACKAGES = {"check_array_api_input", "check_classifier_data_not_an_array"}
+_SKLEARN_CHECKS = [
+    (est, check)
+    for est, check in estimator_checks_generator(DimensionalClassifier(), legacy=True, mark=None)
+    if getattr(check, "func", check).__name__ not in _NEEDS_ABSENT_PACKAGES
+]
+
+
+@pytest.mark.parametrize(
+    ("estimator", "check"),
+    _SKLEARN_CHECKS,
+    ids=[getattr(c, "func", c).__name__ for _, c in _SKLEARN_CHECKS],
+)
+def test_sklearn_estimator_checks(estimator, check) -> None:
+    check(estimator)
