@@ -35,7 +35,7 @@ import numpy as np
 
 from citysim import render_light as light
 from citysim.agents import AgentState
-from citysim.render_agents import AGENT_MODELS, AgentLighting, AgentPainter, DrawnAgent
+from citysim.render_agents import AgentLighting, AgentPainter, DrawnAgent
 from citysim.render_background import ShadingInputs, StaticScene
 from citysim.render_beams import (
     BEAMS,
@@ -48,6 +48,7 @@ from citysim.render_beams import (
 )
 from citysim.render_canvas import build_canvas
 from citysim.render_effects import Insects, SensorNoise, draw_rain
+from citysim.render_models import AGENT_MODELS
 from citysim.street import Street
 from detector.camera import CameraModel
 

@@ -38,6 +38,8 @@ from citysim.street import Street
 POOL_MIN_RADIANCE = 2e-5
 #: Crown displacement per unit wind speed, m per (m/s).
 SWAY_M_PER_MPS = 0.025
+#: A swaying crown is pre-rendered in this many positions across its sway.
+SWAY_POSES = 9
 #: Crowns whose sway moves them less than this in the image (px) are drawn still.
 SWAY_MIN_PX = 0.4
 #: Leaf texture: crowns are patchy, not painted boxes.
@@ -56,30 +58,29 @@ class LampPool:
 
 @dataclass(frozen=True, eq=False)
 class CrownSprite:
-    """A swaying tree crown rendered at rest over ``roi`` (margins for the sway included)."""
+    """A swaying tree crown over canvas box ``roi`` (margins for the sway included).
+
+    The sway moves the crown along one image direction, so it is pre-rendered
+    in SWAY_POSES positions from one extreme to the other; each frame shows
+    the pose nearest the wind's current offset. Per pose: coverage (alpha,
+    already cut where nearer static things stand before the crown), radiance
+    x alpha without lamps and per lamp at level 1.
+    """
 
     roi: tuple[int, int, int, int]
-    alpha: np.ndarray
     near_m: float  # distance to the crown's nearest visible point: its depth for occlusion
-    base: np.ndarray  # radiance x alpha (premultiplied), like the pools
-    pools: tuple[tuple[int, np.ndarray], ...]
-    behind: np.ndarray  # 1 where no standing static surface is nearer than the crown, else 0
-    jacobian_px_per_m: np.ndarray  # (2, 2): canvas motion of the crown per metre of sway in x, y
-    centre_m: np.ndarray
-    amplitude_m: float
-    direction: np.ndarray  # (2,) unit, ground plane
+    alpha: tuple[np.ndarray, ...]  # per pose
+    covered: tuple[np.ndarray, ...]  # per pose, bool: alpha > 1/2 (where it hides what is behind)
+    base: tuple[np.ndarray, ...]  # per pose
+    pools: tuple[tuple[int, tuple[np.ndarray, ...]], ...]  # (lamp index, per pose)
     freq_hz: float
     phases_rad: tuple[float, float]
 
-    def displacement_m(self, t_s: float) -> np.ndarray:
-        """Horizontal crown offset (x, y) at time t: a gust-like sum of two sines, m."""
+    def pose(self, t_s: float) -> int:
+        """Index of the pre-rendered pose nearest the sway at time t (a gust-like sum of two sines)."""
         w = 2.0 * math.pi * self.freq_hz * t_s
         s = 0.75 * math.sin(w + self.phases_rad[0]) + 0.25 * math.sin(2.3 * w + self.phases_rad[1])
-        return self.amplitude_m * s * self.direction
-
-    def displacement_px(self, t_s: float) -> np.ndarray:
-        """Canvas shift of the crown at time t (linearised projection: sway is centimetres)."""
-        return self.jacobian_px_per_m @ self.displacement_m(t_s)
+        return round((s + 1.0) / 2.0 * (len(self.alpha) - 1))
 
 
 @dataclass(frozen=True)
@@ -294,20 +295,30 @@ class StaticScene:
         near_m = float(t[hit].min())
         x0, y0, x1, y1 = roi
         behind = (self.occluder_depth[y0:y1, x0:x1] > near_m).astype(np.float32)
+        # image shift per metre of sway, linearised (the sway is centimetres)
         c = crown.centre_m
         uv = canvas.project(np.array([c, c + [0.01, 0.0, 0.0], c + [0.0, 0.01, 0.0]]))
         jacobian = np.column_stack([uv[1] - uv[0], uv[2] - uv[0]]) / 0.01
+        extreme_px = jacobian @ (amplitude_m * np.array([math.cos(angle), math.sin(angle)]))
+        size = (shape[1], shape[0])
+
+        def poses(img: np.ndarray) -> tuple[np.ndarray, ...]:
+            out = []
+            for s in np.linspace(-1.0, 1.0, SWAY_POSES):
+                du, dv = s * extreme_px
+                shift = np.array([[1.0, 0.0, du], [0.0, 1.0, dv]])
+                moved = cv2.warpAffine(img, shift, size, flags=cv2.INTER_LINEAR, borderValue=0.0)
+                out.append(cv2.multiply(moved, behind))  # nearer static things stay in front
+            return tuple(out)
+
+        alpha = poses(sprite(np.ones(hit.sum()), 0.0))
         return CrownSprite(
             roi,
-            sprite(np.ones(hit.sum()), 0.0),
             near_m,
-            sprite(base_hit, 0.0),
-            pools,
-            behind,
-            jacobian,
-            crown.centre_m,
-            amplitude_m,
-            np.array([math.cos(angle), math.sin(angle)]),
+            alpha,
+            tuple(a > 0.5 for a in alpha),
+            poses(sprite(base_hit, 0.0)),
+            tuple((j, poses(pool)) for j, pool in pools),
             float(freq_hz),
             phases,
         )
@@ -341,22 +352,14 @@ class StaticScene:
         img: np.ndarray,
         depth: np.ndarray,
     ) -> None:
-        du, dv = crown.displacement_px(t_s)
-        if not (np.isfinite(du) and np.isfinite(dv)):
-            return
-        value = crown.base
+        k = crown.pose(t_s)
+        value = crown.base[k]
         for j, pool in crown.pools:
             if lamp_levels[j] > 0.0:
-                value = cv2.scaleAdd(pool, float(lamp_levels[j]), value)
-        shift = np.array([[1.0, 0.0, du], [0.0, 1.0, dv]])
-        size = (value.shape[1], value.shape[0])
-        value = cv2.warpAffine(value, shift, size, flags=cv2.INTER_LINEAR, borderValue=0.0)
-        alpha = cv2.warpAffine(crown.alpha, shift, size, flags=cv2.INTER_LINEAR, borderValue=0.0)
-        # nearer static things (a parked car before the tree) stay in front
-        value = cv2.multiply(value, crown.behind)
-        alpha = cv2.multiply(alpha, crown.behind)
+                value = cv2.scaleAdd(pool[k], float(lamp_levels[j]), value)
+        alpha = crown.alpha[k]
         x0, y0, x1, y1 = crown.roi
         view = img[y0:y1, x0:x1]
         cv2.subtract(view, cv2.multiply(view, alpha), dst=view)
         cv2.add(view, value, dst=view)
-        depth[y0:y1, x0:x1][alpha > 0.5] = crown.near_m
+        depth[y0:y1, x0:x1][crown.covered[k]] = crown.near_m
