@@ -136,8 +136,8 @@ class Detector:
             valid,
             self.division,
         )
-        with np.errstate(invalid="ignore"):
-            keep = np.flatnonzero(parts.valid & (parts.features[:, 3] <= self.max_distance_m))
+        # NaN distances (no ground point) compare False
+        keep = np.flatnonzero(parts.valid & (parts.features[:, 3] <= self.max_distance_m))
         if len(keep) == 0:
             self.tracker.update(self._no_boxes)
             return []

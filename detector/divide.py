@@ -60,6 +60,7 @@ class DivisionParams:
     ``max_spot_height_to_width``: the spot's estimated height / width (m) is at most this.
     ``wide_row_factor``: a row is part of a spot in front when it is this much wider than the body.
     ``spot_row_fraction``: spot rows have side pixels at least this fraction of the widest side row.
+    ``min_height_px``: shorter regions are not analysed (too few rows for the histograms).
     """
 
     max_extent: float = 0.6
@@ -71,6 +72,7 @@ class DivisionParams:
     max_spot_height_to_width: float = 0.6
     wide_row_factor: float = 1.5
     spot_row_fraction: float = 0.25
+    min_height_px: int = 16
 
     def __post_init__(self) -> None:
         for name in (
@@ -87,6 +89,10 @@ class DivisionParams:
             value = getattr(self, name)
             if not value > 0.0:
                 raise ValueError(f"DivisionParams.{name} must be > 0, got {value!r}")
+        if not (isinstance(self.min_height_px, int) and self.min_height_px >= 6):
+            raise ValueError(
+                f"DivisionParams.min_height_px must be an integer >= 6, got {self.min_height_px!r}"
+            )
         if not self.wide_row_factor > 1.0:
             raise ValueError(
                 f"DivisionParams.wide_row_factor must be > 1, got {self.wide_row_factor!r}"
@@ -117,7 +123,7 @@ def split_object_and_spot(
 
     Pixel-only test (histograms); the metric criteria are applied by ``divide_regions``.
     """
-    occ = roi > 0
+    occ = roi if roi.dtype == bool else roi > 0
     h, w = occ.shape
     if h < 6 or w < 6:
         return None
@@ -211,9 +217,11 @@ def divide_regions(
     boxes = np.asarray(boxes_px, np.int32).reshape(-1, 4)
     areas = np.asarray(areas_px, np.float64).reshape(-1)
     n = len(boxes)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        extent = areas / np.maximum(boxes[:, 2] * boxes[:, 3], 1)
-        candidate = valid & ((extent < params.max_extent) | (features[:, 2] > params.max_area_m2))
+    extent = areas / np.maximum(boxes[:, 2] * boxes[:, 3], 1)
+    # NaN features (invalid rows) compare False without a warning
+    candidate = valid & ((extent < params.max_extent) | (features[:, 2] > params.max_area_m2))
+    # histograms of a region under min_height_px rows cannot resolve an object above a spot
+    candidate &= boxes[:, 3] >= params.min_height_px
     divided = np.zeros(n, bool)
     if not candidate.any():
         return Division(boxes, areas, features, valid, divided, np.zeros((0, 4), np.int32))
@@ -223,7 +231,7 @@ def divide_regions(
         x, y, w, h = (int(v) for v in boxes[i])
         roi = np.zeros((h, w), np.uint8)
         cv2.drawContours(roi, contours, int(i), 1, thickness=cv2.FILLED, offset=(-x, -y))
-        parts = split_object_and_spot(roi, params)
+        parts = split_object_and_spot(roi.view(bool), params)
         if parts is None:
             continue
         body = _part_box_and_area(parts[0], x, y)

@@ -197,26 +197,34 @@ class Segmenter:
                 fg,
             )
 
-        boxes, areas = contour_boxes_and_areas(contours)
-        box_area = boxes[:, 2].astype(np.float64) * boxes[:, 3]
-        keep = (areas >= p.min_area_fraction * frame_px) & (areas >= p.min_extent * box_area)
-        idx = np.flatnonzero(keep)
-        boxes = boxes[idx]
+        idx, boxes, areas = _large_enough(contours, p.min_area_fraction * frame_px)
+        dense = areas >= p.min_extent * (boxes[:, 2].astype(np.float64) * boxes[:, 3])
+        idx, boxes, areas = idx[dense], boxes[dense], areas[dense]
         height_px, width_px = gray.shape
-        touches = (
-            (boxes[:, 0] <= 0)
-            | (boxes[:, 1] <= 0)
-            | (boxes[:, 0] + boxes[:, 2] >= width_px)
-            | (boxes[:, 1] + boxes[:, 3] >= height_px)
+        touches = np.any(
+            (boxes[:, :2] <= 0) | (boxes[:, :2] + boxes[:, 2:] >= (width_px, height_px)), axis=1
         )
         return Regions(
             boxes_px=boxes,
-            areas_px=areas[idx],
+            areas_px=areas,
             contours=[contours[i] for i in idx],
             touches_border=touches,
             foreground_fraction=foreground_fraction,
             mask=fg,
         )
+
+
+def _large_enough(contours, min_area_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Indices, boxes and areas of the contours with Green's-theorem area >= min_area_px."""
+    if len(contours) > _FEW_CONTOURS:
+        boxes, areas = contour_boxes_and_areas(contours)
+        idx = np.flatnonzero(areas >= min_area_px)
+        return idx, boxes[idx], areas[idx]
+    # few contours: areas first, boxes only for the survivors (most are specks)
+    all_areas = [cv2.contourArea(c) for c in contours]
+    keep = [i for i, a in enumerate(all_areas) if a >= min_area_px]
+    boxes = np.array([cv2.boundingRect(contours[i]) for i in keep], np.int32).reshape(-1, 4)
+    return np.array(keep, np.intp), boxes, np.array([all_areas[i] for i in keep], np.float64)
 
 
 def contour_boxes_and_areas(

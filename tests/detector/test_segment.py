@@ -123,20 +123,24 @@ def test_border_touching_regions_are_flagged_not_dropped():
     assert middle is not None and not regions.touches_border[middle]
 
 
-def test_tiny_and_sparse_regions_are_dropped():
+@pytest.mark.parametrize("n_specks", [1, 60])  # few contours and many: both code paths
+def test_tiny_and_sparse_regions_are_dropped(n_specks):
     scene = Scene(3)
     seg = warmed_up(scene)
     min_area_px = SegmenterParams().min_area_fraction * H_PX * W_PX  # 76.8 px
+    grid = [(x, y) for y in range(140, 230, 18) for x in range(10, 300, 24)]  # 12 px apart at least
+    speck_xy = grid[:n_specks]
     for i in range(5):
-        img = scene.frame([(40 + 3 * i, 50, 6, 6), (120 + 3 * i, 50, 14, 14)])
+        specks = [(int(x) + 3 * i, int(y), 6, 6) for x, y in speck_xy]
+        img = scene.frame([*specks, (120 + 3 * i, 50, 14, 14)])
         # a thin diagonal stroke: area above the size limit, extent below 0.2
-        cv2.line(img, (200 + 3 * i, 60), (260 + 3 * i, 140), 200, 3)
+        cv2.line(img, (200 + 3 * i, 30), (260 + 3 * i, 110), 200, 3)
         regions = seg.apply(img)
     assert len(regions) == 1
     k = match_box(regions, (132, 50, 14, 14))
     assert k is not None and regions.areas_px[k] >= min_area_px
-    # the stroke and the speck were foreground, just filtered out
-    assert regions.foreground_fraction * H_PX * W_PX > 14 * 14 + 36 + 150
+    # the stroke and the specks were foreground, just filtered out
+    assert regions.foreground_fraction * H_PX * W_PX > 14 * 14 + 150 + 20 * n_specks
 
 
 def test_shadow_is_cut_but_would_be_foreground_without_the_cut():
