@@ -257,8 +257,8 @@ class CameraRenderer:
         forward_m = self.camera.forward_and_lateral_m(xy)[:, 0]
         drawn = sorted(drawn, key=lambda d: d.index)
         boxes = [self.canvas.frame_box(d.roi) for d in drawn]
-        # a few agents: remap their boxes one by one; more: one remap of the whole label image
-        whole = self.canvas.to_frame(labels, nearest=True) if len(drawn) > 2 else None
+        # a few agents: remap their boxes one by one; many: one remap of the whole label image
+        whole = self.canvas.to_frame(labels, nearest=True) if len(drawn) > 8 else None
         if labels.dtype == np.uint8:
             counts = cv2.calcHist([labels], [0], None, [256], [0, 256]).ravel()
         else:

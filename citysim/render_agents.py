@@ -68,23 +68,22 @@ class AgentLighting:
 
 
 def part_radiance(
-    canvas: Canvas, centres_m: np.ndarray, rho: np.ndarray, lighting: AgentLighting
+    cam_centres_m: np.ndarray,
+    world_centres_m: np.ndarray,
+    rho: np.ndarray,
+    lighting: AgentLighting,
 ) -> np.ndarray:
-    """(N, 3) part centres with reflectances -> (N,) radiance."""
-    cam = canvas.camera
-    rel = centres_m - cam.position_m
-    r = np.linalg.norm(rel, axis=1)
-    fwd = cam.rotation_world_to_cam[2]
-    cos_axis = (rel @ fwd) / np.maximum(r, 1e-9)
-    irr = light.emitter_irradiance(
-        lighting.ir_emitter_power, lighting.ambient_light, r, MEAN_INCIDENCE_COS, cos_axis
-    )
-    irr = irr + light.day_irradiance(lighting.ambient_light, np.zeros(len(r)))
-    irr = irr + light.night_irradiance(lighting.ambient_light)
+    """Parts' radiance from their centres in the camera frame (N, 3; the emitter's view) and
+    the world (N, 3; the lamps' view) and their reflectances (N,)."""
+    r2 = np.einsum("ij,ij->i", cam_centres_m, cam_centres_m)
+    cos_axis = np.maximum(cam_centres_m[:, 2], 0.0) / np.sqrt(np.maximum(r2, 1e-12))
+    a = lighting.ambient_light
+    emitter = (1.0 - a) * lighting.ir_emitter_power * MEAN_INCIDENCE_COS
+    irr = emitter * cos_axis**light.BEAM_EXPONENT / np.maximum(r2, 0.04)
+    irr += float(light.day_irradiance(a, 0.0)) + light.night_irradiance(a)
     if len(lighting.lamp_levels):
-        irr = (
-            irr
-            + light.lamp_irradiance(centres_m, None, lighting.lamp_positions_m)
+        irr += (
+            light.lamp_irradiance(world_centres_m, None, lighting.lamp_positions_m)
             @ lighting.lamp_levels
         )
     return rho * irr
@@ -149,26 +148,27 @@ class AgentPainter:
             return []
         cam = self.canvas.camera
         corners, rho, n_parts = posed_models(agents)  # (sum P, K, 3)
-        starts = np.concatenate([[0], np.cumsum(n_parts)])
+        starts = np.zeros(len(agents) + 1, dtype=np.intp)
+        np.cumsum(n_parts, out=starts[1:])
         owner = np.repeat(np.arange(len(agents)), n_parts)
-        centres = corners.mean(axis=1)
-        radiance = part_radiance(self.canvas, centres, rho, lighting).astype(np.float32)
-        part_dist = np.linalg.norm(centres - cam.position_m, axis=1)
         cam_pts = cam.world_to_cam(corners.reshape(-1, 3)).reshape(corners.shape)
+        z = cam_pts[..., 2]
         # the common case - every vertex in front of the camera - is projected in one go;
         # agents wholly behind the camera are dropped, the few straddling it are clipped
-        in_front = np.minimum.reduceat(cam_pts[..., 2].min(axis=1), starts[:-1]) >= Z_NEAR_M
-        behind = np.maximum.reduceat(cam_pts[..., 2].max(axis=1), starts[:-1]) < Z_NEAR_M
-        uv = self.canvas.cam_to_canvas(cam_pts.reshape(-1, 3)).reshape(len(corners), -1, 2)
-        with np.errstate(invalid="ignore"):
-            fixed = np.rint(np.clip(uv, -1e6, 1e6) * (1 << SUBPIXEL_BITS)).astype(np.int32)
+        in_front = np.minimum.reduceat(z.min(axis=1), starts[:-1]) >= Z_NEAR_M
+        behind = np.maximum.reduceat(z.max(axis=1), starts[:-1]) < Z_NEAR_M
+        cam_centres = cam_pts.mean(axis=1)
+        world_centres = corners.mean(axis=1) if len(lighting.lamp_levels) else None
+        radiance = part_radiance(cam_centres, world_centres, rho, lighting).astype(np.float32)
+        part_dist = np.sqrt(np.einsum("ij,ij->i", cam_centres, cam_centres))
+        uv = self._to_canvas(cam_pts.reshape(-1, 3)).reshape(len(corners), -1, 2)
+        fixed = np.rint(uv * (1 << SUBPIXEL_BITS)).astype(np.int32)
         lo = np.minimum.reduceat(uv.min(axis=1), starts[:-1])
         hi = np.maximum.reduceat(uv.max(axis=1), starts[:-1])
         order = np.lexsort((-part_dist, owner))  # grouped by agent, far parts first
 
         anchors = np.array([[a.x_m, a.y_m, 0.5 * a.height_m] for a in agents])
-        agent_dist = np.linalg.norm(anchors - cam.position_m, axis=1)
-        motion = self._image_motion(agents, anchors)
+        agent_dist, motion = self._distance_and_motion(agents, anchors)
         drawn: list[DrawnAgent] = []
         for i in np.argsort(-agent_dist, kind="stable"):
             if behind[i]:
@@ -198,20 +198,35 @@ class AgentPainter:
                 drawn.append(result)
         return drawn
 
-    def _image_motion(self, agents: Sequence[AgentState], anchors_m: np.ndarray) -> np.ndarray:
-        """(N, 2) canvas displacement of each agent from time t back to t - exposure (0 if no blur)."""
-        motion = np.zeros((len(agents), 2))
+    def _to_canvas(self, cam_pts: np.ndarray) -> np.ndarray:
+        """Camera-frame points -> canvas coordinates; points before the near plane get
+        meaningless (finite) coordinates - their agents are clipped or dropped instead."""
+        cam = self.canvas.camera
+        z = np.where(cam_pts[:, 2] >= Z_NEAR_M, cam_pts[:, 2], 1.0)
+        u = cam.fx_px * cam_pts[:, 0] / z + (cam.cx_px - self.canvas.x0_px)
+        v = cam.fy_px * cam_pts[:, 1] / z + (cam.cy_px - self.canvas.y0_px)
+        return np.column_stack([u, v])
+
+    def _distance_and_motion(
+        self, agents: Sequence[AgentState], anchors_m: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Each agent's distance from the lens (m) and canvas displacement (N, 2) from time t
+        back to t - exposure (0 without blur or when the agent is not in front)."""
+        cam = self.canvas.camera
+        n = len(agents)
         if not self.motion_blur:
-            return motion
-        speed = np.array([a.speed_mps for a in agents])
-        heading = np.array([a.heading_rad for a in agents])
-        back_m = self.exposure_s * speed
-        past = anchors_m - np.column_stack(
-            [back_m * np.cos(heading), back_m * np.sin(heading), np.zeros(len(agents))]
-        )
-        uv = self.canvas.project(np.concatenate([anchors_m, past]))
-        d = uv[len(agents) :] - uv[: len(agents)]
-        return np.where(np.isfinite(d), d, 0.0)
+            now = cam.world_to_cam(anchors_m)
+            return np.sqrt(np.einsum("ij,ij->i", now, now)), np.zeros((n, 2))
+        speed_heading = np.array([(a.speed_mps, a.heading_rad) for a in agents])
+        back_m = self.exposure_s * speed_heading[:, 0]
+        past = anchors_m.copy()
+        past[:, 0] -= back_m * np.cos(speed_heading[:, 1])
+        past[:, 1] -= back_m * np.sin(speed_heading[:, 1])
+        both = cam.world_to_cam(np.concatenate([anchors_m, past]))
+        dist = np.sqrt(np.einsum("ij,ij->i", both[:n], both[:n]))
+        uv = self._to_canvas(both)
+        ok = (both[:n, 2] >= Z_NEAR_M) & (both[n:, 2] >= Z_NEAR_M)
+        return dist, np.where(ok[:, None], uv[n:] - uv[:n], 0.0)
 
     def _clipped_polygons(
         self, cam_pts: np.ndarray

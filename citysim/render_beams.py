@@ -81,6 +81,7 @@ def _lamp_points(agent: AgentState, spec: BeamSpec) -> np.ndarray:
 SPOT_TEXELS_FORWARD, SPOT_TEXELS_LATERAL = 96, 48
 
 
+@cache
 def spot_extent_m(spec: BeamSpec) -> tuple[float, float]:
     """(forward reach, half width) of the ground box that holds the spot, m."""
     f_far = spec.centre_m + 2.0 * spec.sigma_forward_m
@@ -115,38 +116,65 @@ def _spots_to_canvas(
     cam = canvas.camera
     specs = [BEAMS[a.cls] for a in agents]
     n = len(agents)
-    heading = np.array([a.heading_rad for a in agents])
-    c, s = np.cos(heading), np.sin(heading)
-    origin = np.array(
-        [_lamp_points(a, spec)[:, :2].mean(axis=0) for a, spec in zip(agents, specs, strict=True)]
+    # per agent: x, y, heading, length, width, mean lamp (forward, left) fractions, reach, half width
+    rows = np.array(
+        [
+            (
+                a.x_m,
+                a.y_m,
+                a.heading_rad,
+                a.length_m,
+                a.width_m,
+                *_mean_lamp(spec),
+                *spot_extent_m(spec),
+            )
+            for a, spec in zip(agents, specs, strict=True)
+        ]
     )
-    extent = np.array([spot_extent_m(spec) for spec in specs])
-    f_far, half_w = extent[:, 0], extent[:, 1]
+    x, y, heading, length, width, f_frac, l_frac, f_far, half_w = rows.T
+    c, s = np.cos(heading), np.sin(heading)
+    fl, ll = f_frac * length, l_frac * width
+    ox, oy = x + c * fl - s * ll, y + s * fl + c * ll  # the lamps' mean position: the beam origin
     # texel (col, row) -> ground (x, y, 1): columns run to the left of the heading, rows forward
     df, dl = f_far / SPOT_TEXELS_FORWARD, 2.0 * half_w / SPOT_TEXELS_LATERAL
     tex_to_ground = np.zeros((n, 3, 3))
-    tex_to_ground[:, 0] = np.column_stack(
-        [-dl * s, df * c, origin[:, 0] + half_w * s + 0.5 * (df * c - dl * s)]
-    )
-    tex_to_ground[:, 1] = np.column_stack(
-        [dl * c, df * s, origin[:, 1] - half_w * c + 0.5 * (df * s + dl * c)]
-    )
+    tex_to_ground[:, 0, 0], tex_to_ground[:, 0, 1] = -dl * s, df * c
+    tex_to_ground[:, 0, 2] = ox + half_w * s + 0.5 * (df * c - dl * s)
+    tex_to_ground[:, 1, 0], tex_to_ground[:, 1, 1] = dl * c, df * s
+    tex_to_ground[:, 1, 2] = oy - half_w * c + 0.5 * (df * s + dl * c)
     tex_to_ground[:, 2, 2] = 1.0
     box_world = np.einsum("nij,kj->nki", tex_to_ground, _SPOT_BOX_TEX)  # (n, 4, 3)
     box_world[..., 2] = 0.0
     box_cam = cam.world_to_cam(box_world.reshape(-1, 3)).reshape(n, 4, 3)
     # the spot's ground box is cut where it leaves the camera's view of the ground (behind or under it)
     z_cut = 0.8 * scene.nearest_ground_cam_z_m
+    whole = np.all(box_cam[..., 2] >= z_cut, axis=1)
+    uv = canvas.cam_to_canvas(np.where(whole[:, None, None], box_cam, 1.0).reshape(-1, 3)).reshape(
+        n, 4, 2
+    )
+    lo, hi = uv.min(axis=1), uv.max(axis=1)
+    to_canvas = scene.ground_to_canvas @ tex_to_ground
     out: list[tuple[BeamSpec, np.ndarray, tuple] | None] = []
     for i in range(n):
-        pts = (
-            box_cam[i] if np.all(box_cam[i, :, 2] >= z_cut) else clip_solid_near(box_cam[i], z_cut)
-        )
-        roi = None if pts is None else roi_of(canvas.cam_to_canvas(pts), canvas)
-        out.append(
-            None if roi is None else (specs[i], scene.ground_to_canvas @ tex_to_ground[i], roi)
-        )
+        if whole[i]:
+            roi = _clip_box(lo[i], hi[i], canvas)
+        else:
+            pts = clip_solid_near(box_cam[i], z_cut)
+            roi = None if pts is None else roi_of(canvas.cam_to_canvas(pts), canvas)
+        out.append(None if roi is None else (specs[i], to_canvas[i], roi))
     return out
+
+
+@cache
+def _mean_lamp(spec: BeamSpec) -> tuple[float, float]:
+    lamps = np.array(spec.lamps_flz)
+    return float(lamps[:, 0].mean()), float(lamps[:, 1].mean())
+
+
+def _clip_box(lo: np.ndarray, hi: np.ndarray, canvas: Canvas) -> tuple[int, int, int, int] | None:
+    x0, y0 = max(math.floor(lo[0]) - 1, 0), max(math.floor(lo[1]) - 1, 0)
+    x1, y1 = min(math.ceil(hi[0]) + 2, canvas.width_px), min(math.ceil(hi[1]) + 2, canvas.height_px)
+    return None if x1 <= x0 or y1 <= y0 else (x0, y0, x1, y1)
 
 
 _SPOT_BOX_TEX = np.array(

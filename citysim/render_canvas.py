@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -92,16 +93,20 @@ class Canvas:
         Conservative: a sphere is dropped only when it lies wholly outside one of
         the canvas's four side planes or before the near plane.
         """
+        p = self.camera.world_to_cam(centres_m)
+        inside = (p @ self._side_normals.T) >= -radii_m[:, None]
+        return np.all(inside, axis=1) & (p[:, 2] >= Z_NEAR_M - radii_m)
+
+    @cached_property
+    def _side_normals(self) -> np.ndarray:
+        """(4, 3) inward unit normals (camera frame) of the planes through the canvas edges."""
         cam = self.camera
-        p = cam.world_to_cam(centres_m)
         a_l = (self.x0_px - 0.5 - cam.cx_px) / cam.fx_px
         a_r = (self.x0_px + self.width_px - 0.5 - cam.cx_px) / cam.fx_px
         b_t = (self.y0_px - 0.5 - cam.cy_px) / cam.fy_px
         b_b = (self.y0_px + self.height_px - 0.5 - cam.cy_px) / cam.fy_px
         normals = np.array([[1.0, 0.0, -a_l], [-1.0, 0.0, a_r], [0.0, 1.0, -b_t], [0.0, -1.0, b_b]])
-        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-        inside = (p @ normals.T) >= -radii_m[:, None]
-        return np.all(inside, axis=1) & (p[:, 2] >= Z_NEAR_M - radii_m)
+        return normals / np.linalg.norm(normals, axis=1, keepdims=True)
 
     def frame_box(self, roi: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
         """Frame box (x0, y0, x1, y1), exclusive ends, that holds everything of canvas box ``roi``."""

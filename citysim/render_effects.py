@@ -102,7 +102,7 @@ def draw_rain(
             cv2.polylines(
                 layer, list(fixed[sel]), False, float(radiance[sel].mean()), 1, cv2.LINE_8, 4
             )
-    img += layer
+    cv2.add(img, layer, dst=img)
 
 
 @dataclass
@@ -208,4 +208,7 @@ class Insects:
         layer = cv2.GaussianBlur(layer, (0, 0), sigma_px)
         # the blob's light is spread by defocus and motion; its total stays the same
         streak_px = max(float(np.hypot(*(uv[0] - uv[1]))), 1.0)
-        img[y0:y1, x0:x1] += min(brightness, 50.0) * layer * (core_px / (core_px + streak_px))
+        view = img[y0:y1, x0:x1]
+        cv2.scaleAdd(
+            layer, float(min(brightness, 50.0) * core_px / (core_px + streak_px)), view, dst=view
+        )

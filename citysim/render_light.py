@@ -109,6 +109,9 @@ def lamp_irradiance(
 
 
 def radiance_to_dn(radiance: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """Linear radiance (float32, full scale 1) -> 8-bit camera output, DN = 255 sqrt(L)."""
-    lin = np.maximum(radiance, 0.0, dtype=np.float32)
-    return cv2.convertScaleAbs(cv2.sqrt(lin), dst=out, alpha=255.0)
+    """Linear radiance (float32, full scale 1) -> 8-bit camera output, DN = 255 sqrt(L).
+
+    Radiance is a sum of non-negative terms; a rounding-level negative gives
+    sqrt = NaN, which the saturating conversion turns into 0, as it should.
+    """
+    return cv2.convertScaleAbs(cv2.sqrt(radiance), dst=out, alpha=255.0)
