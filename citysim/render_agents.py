@@ -124,6 +124,33 @@ def _line_kernel(du_steps: int, dv_steps: int) -> tuple[np.ndarray, tuple[int, i
     return kernel, (int(ax), int(ay))
 
 
+#: Direct line filters are kept under this many taps; longer smears are done at lower resolution.
+MAX_KERNEL_TAPS = 48
+
+
+def _smear(layer: np.ndarray, du_px: float, dv_px: float) -> np.ndarray:
+    """Motion blur of ``layer`` by the image motion (du, dv) px (see ``_blur_kernel``).
+
+    A long diagonal smear would need a big 2-D kernel; the layer is then
+    halved in resolution until the kernel is small, smeared, and scaled back.
+    The smear is wider than the detail lost, so the result is indistinguishable.
+    """
+    level = 0
+    while (abs(du_px) / 2**level + 2) * (abs(dv_px) / 2**level + 2) > MAX_KERNEL_TAPS:
+        level += 1
+    kernel, anchor = _blur_kernel(du_px / 2**level, dv_px / 2**level)
+    if level == 0:
+        return cv2.filter2D(layer, -1, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT)
+    h, w = layer.shape
+    f = 2**level
+    hs, ws = (h + f - 1) // f, (w + f - 1) // f
+    # pad to whole f x f blocks so down- and up-scaling keep pixel centres aligned
+    padded = cv2.copyMakeBorder(layer, 0, hs * f - h, 0, ws * f - w, cv2.BORDER_CONSTANT, value=0.0)
+    small = cv2.resize(padded, (ws, hs), interpolation=cv2.INTER_AREA)
+    small = cv2.filter2D(small, -1, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT)
+    return cv2.resize(small, (ws * f, hs * f), interpolation=cv2.INTER_LINEAR)[:h, :w]
+
+
 class AgentPainter:
     """Draws agents on one camera's canvas (see the module docstring)."""
 
@@ -290,11 +317,8 @@ class AgentPainter:
         coverage = cv2.LUT(index_buf, _COVERAGE_LUT)
         index_buf.fill(0)
         if blur:
-            kernel, anchor = _blur_kernel(du, dv)
-            value = cv2.filter2D(value, -1, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT)
-            coverage = cv2.filter2D(
-                coverage, -1, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT
-            )
+            value = _smear(value, du, dv)
+            coverage = _smear(coverage, du, dv)
         visible = cv2.compare(occluder_depth[y0:y1, x0:x1], agent_dist_m, cv2.CMP_GE)
         if cv2.countNonZero(visible) < visible.size:
             value = cv2.bitwise_and(value, value, mask=visible)

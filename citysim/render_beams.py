@@ -303,55 +303,77 @@ def glare(
     size_m: np.ndarray,
     wet: bool,
 ) -> None:
-    """Blobs for light sources at ``points_m`` (N, 3) with radiance x m^2 ``power`` (N,)."""
+    """Blobs for light sources at ``points_m`` (N, 3) with radiance x m^2 ``power`` (N,);
+    sources hidden behind a nearer standing surface are left out."""
     if len(points_m) == 0:
         return
     cam = canvas.camera
-    uv = canvas.project(points_m)
     cam_pts = cam.world_to_cam(points_m)
-    dist = np.linalg.norm(points_m - cam.position_m, axis=1)
+    dist = np.sqrt(np.einsum("ij,ij->i", cam_pts, cam_pts))
+    z = np.maximum(cam_pts[:, 2], 1e-3)
+    u = cam.fx_px * cam_pts[:, 0] / z + (cam.cx_px - canvas.x0_px)
+    v = cam.fy_px * cam_pts[:, 1] / z + (cam.cy_px - canvas.y0_px)
+    peak = power / np.maximum(dist**2, 0.25)
+    sigma = np.maximum(0.7, cam.fx_px * size_m / z / 2.0)
     h, w = canvas.shape
+    show = (cam_pts[:, 2] > 0.05) & (peak >= MIN_GLARE_RADIANCE)
+    show &= (u > -3.0 * HALO_SCALE * sigma) & (u < w + 3.0 * HALO_SCALE * sigma)
+    show &= (v > -3.0 * HALO_SCALE * sigma) & (v < h + 3.0 * HALO_SCALE * sigma)
     mirrors = None
-    if wet:
+    if wet and show.any():
         ground = points_m * np.array([1.0, 1.0, 0.0])
-        mirrors = (canvas.project(ground), canvas.project(points_m * np.array([1.0, 1.0, -1.0])))
-    for i in range(len(points_m)):
-        u, v = uv[i]
-        if not np.isfinite(u) or power[i] <= 0.0:
-            continue
-        col, row = int(round(u)), int(round(v))
+        mirrors = (
+            canvas.project(ground)[:, 1],
+            canvas.project(points_m * np.array([1.0, 1.0, -1.0]))[:, 1],
+        )
+    for i in np.flatnonzero(show):
+        col, row = round(u[i]), round(v[i])
         if 0 <= col < w and 0 <= row < h and occluder_depth[row, col] < dist[i] - 0.3:
             continue
-        sigma = max(0.7, cam.fx_px * size_m[i] / max(cam_pts[i, 2], 1e-3) / 2.0)
-        peak = float(power[i] / max(dist[i] ** 2, 0.25))
-        if peak < MIN_GLARE_RADIANCE:
-            continue
-        _blob(canvas, img, u, v, sigma, peak)
+        _blob(canvas, img, u[i], v[i], sigma[i], peak[i])
         if mirrors is not None:
             _streak(
-                canvas, img, u, mirrors[0][i, 1], mirrors[1][i, 1], sigma, WET_REFLECTION * peak
+                canvas, img, u[i], mirrors[0][i], mirrors[1][i], sigma[i], WET_REFLECTION * peak[i]
             )
 
 
 def agent_glare_sources(
     canvas: Canvas, agents: list[AgentState], ambient_light: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Light sources carried by lit agents: (points (N, 3), power (N,), size (N,))."""
-    pts, power, size = [], [], []
-    cam_xy = canvas.camera.position_m[:2]
-    gain = 1.0 - 0.8 * ambient_light
-    for agent in agents:
-        spec = BEAMS.get(agent.cls)
-        if spec is None or not agent.light_on:
-            continue
-        lamps = _lamp_points(agent, spec)
-        fwd = np.array([math.cos(agent.heading_rad), math.sin(agent.heading_rad)])
-        to_cam = cam_xy - lamps[:, :2]
-        facing = (to_cam @ fwd) / np.maximum(np.linalg.norm(to_cam, axis=1), 1e-9)
-        strength = np.where(facing > 0.0, facing**2, spec.rear_glare_fraction * facing**2)
-        pts.append(lamps)
-        power.append(gain * spec.glare_power * strength)
-        size.append(np.full(len(lamps), spec.lamp_size_m))
-    if not pts:
+    """Light sources carried by lit agents: (points (N, 3), power (N,), size (N,)).
+
+    A lamp shines at the camera as cos^2 of the angle between its heading and
+    the camera; from behind, vehicles show their tail lights (a fraction).
+    """
+    lit = [(a, BEAMS[a.cls]) for a in agents if a.light_on and a.cls in BEAMS]
+    if not lit:
         return np.zeros((0, 3)), np.zeros(0), np.zeros(0)
-    return np.concatenate(pts), np.concatenate(power), np.concatenate(size)
+    rows = np.array(
+        [
+            (
+                a.x_m,
+                a.y_m,
+                a.heading_rad,
+                a.length_m,
+                a.width_m,
+                f,
+                lat,
+                z,
+                spec.glare_power,
+                spec.rear_glare_fraction,
+                spec.lamp_size_m,
+            )
+            for a, spec in lit
+            for f, lat, z in spec.lamps_flz
+        ]
+    )
+    x, y, heading, length, width, f_frac, l_frac, z, glare_power, rear, size = rows.T
+    c, s = np.cos(heading), np.sin(heading)
+    px = x + c * f_frac * length - s * l_frac * width
+    py = y + s * f_frac * length + c * l_frac * width
+    cam_xy = canvas.camera.position_m[:2]
+    to_x, to_y = cam_xy[0] - px, cam_xy[1] - py
+    facing = (to_x * c + to_y * s) / np.maximum(np.hypot(to_x, to_y), 1e-9)
+    strength = np.where(facing > 0.0, 1.0, rear) * facing**2
+    gain = 1.0 - 0.8 * ambient_light
+    return np.column_stack([px, py, z]), gain * glare_power * strength, size

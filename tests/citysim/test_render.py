@@ -10,6 +10,7 @@ import pytest
 
 from citysim.agents import AgentState, MemberState
 from citysim.render import CameraRenderer, RenderParams
+from citysim.render_agents import _smear
 from citysim.render_bench import bench_render
 from citysim.render_models import agent_shape
 from citysim.street import LampSite, Lane, Sidewalk, StaticObject, Street
@@ -320,6 +321,26 @@ def test_motion_blur_smears_along_the_image_motion() -> None:
     (ts,), (tb,) = sharp.truth, blurred.truth
     assert tb.w == pytest.approx(ts.w, abs=2)
     assert (tb.x + tb.w / 2) - (ts.x + ts.w / 2) == pytest.approx(smear_px / 2, abs=2.0)
+
+
+@pytest.mark.parametrize("du_px, dv_px", [(3.0, 1.0), (20.0, 15.0), (-25.0, 9.0), (0.0, -30.0)])
+def test_smear_keeps_the_light_and_moves_it_half_the_motion(du_px: float, dv_px: float) -> None:
+    # long diagonal smears run at reduced resolution: they must still be the same smear
+    layer = np.zeros((90, 120), np.float32)
+    layer[30:50, 40:70] = 1.0
+    out = _smear(layer, du_px, dv_px)
+    assert out.sum() == pytest.approx(layer.sum(), rel=0.01)
+    ys, xs = np.nonzero(out > 0.5)
+    assert xs.mean() - 54.5 == pytest.approx(du_px / 2, abs=0.6)
+    assert ys.mean() - 39.5 == pytest.approx(dv_px / 2, abs=0.6)
+    spread = (
+        np.nonzero(out.sum(axis=0) > 1e-3)[0]
+        if abs(du_px) >= abs(dv_px)
+        else np.nonzero(out.sum(axis=1) > 1e-3)[0]
+    )
+    assert np.ptp(spread) + 1 >= (30 if abs(du_px) >= abs(dv_px) else 20) + 0.8 * max(
+        abs(du_px), abs(dv_px)
+    )
 
 
 def test_insects_rain_and_swaying_crowns_change_pixels_but_not_truth() -> None:
