@@ -32,8 +32,8 @@ import cv2
 import numpy as np
 
 #: Irradiance x m^2 of a street lamp at level 1 (full-scale units): under a
-#: 6 m pole a 0.25-reflectance road reads about 140 DN.
-LAMP_POWER = 30.0
+#: 6 m pole a 0.25-reflectance road reads about 95 DN (a walker beside it ~190 DN).
+LAMP_POWER = 20.0
 #: Daylight irradiance on an up-facing surface (full-scale units).
 DAY_IRRADIANCE = 1.0
 #: Vertical surfaces get sky light and some sun, less than the ground.
