@@ -155,7 +155,8 @@ class CameraRenderer:
             if params.sensor_noise_std_dn > 0.0
             else None
         )
-        self.insects = Insects(params.insects_per_min)
+        self.insects = Insects(params.insects_per_min, int(rng.integers(2**63)))
+        self._frame_seed = int(rng.integers(2**63))
 
     def _levels(self, lamp_levels: Sequence[float]) -> np.ndarray:
         levels = np.asarray(lamp_levels, dtype=np.float64).reshape(-1)
@@ -202,10 +203,26 @@ class CameraRenderer:
         return [a for a, ok in zip(agents, seen, strict=True) if ok], spots
 
     def render(
-        self, t_s: float, agents: Sequence[AgentState], lamp_levels: Sequence[float]
+        self,
+        t_s: float,
+        agents: Sequence[AgentState],
+        lamp_levels: Sequence[float],
+        frame_index: int | None = None,
     ) -> RenderedFrame:
-        """The frame at time ``t_s`` (s) with ``agents`` and each street lamp at ``lamp_levels`` (0..1)."""
+        """The frame at time ``t_s`` (s) with ``agents`` and each street lamp at ``lamp_levels`` (0..1).
+
+        Sensor noise and rain come from the renderer's generator, in call order;
+        with ``frame_index`` (>= 0) they come from a generator seeded by that
+        index instead, so a frame is the same whichever frames were rendered
+        before it (cameras that skip idle frames stay comparable).
+        """
         p = self.params
+        if frame_index is None:
+            rng = self.rng
+        elif frame_index < 0:
+            raise ValueError(f"frame_index: must be >= 0, got {frame_index}")
+        else:
+            rng = np.random.default_rng([self._frame_seed, frame_index])
         levels = self._levels(lamp_levels)
         agents, lit = self._in_view(list(agents))
         img, depth = self.scene.compose(t_s, levels)
@@ -237,15 +254,15 @@ class CameraRenderer:
             exposure_s,
             p.ir_emitter_power,
             p.ambient_light,
-            self.rng,
+            rng,
         )
         self.insects.draw(
-            self.canvas, img, t_s, exposure_s, p.ir_emitter_power, p.ambient_light, self.rng
+            self.canvas, img, max(t_s, 0.0), exposure_s, p.ir_emitter_power, p.ambient_light
         )
 
         frame = self.canvas.to_frame(light.radiance_to_dn(img))
         if self.noise is not None:
-            frame = self.noise.apply(frame, self.rng)
+            frame = self.noise.apply(frame, rng)
         truth = self._truth(agents, drawn, labels) if drawn else ()
         return RenderedFrame(frame, truth)
 

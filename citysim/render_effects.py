@@ -10,11 +10,11 @@
   exposure into short near-vertical streaks.
 * ``Insects``: moths at the emitter, 0.15-1.5 m from the lens: big, bright,
   out-of-focus blobs that cross the view fast (a classic false trigger).
-  They arrive as a Poisson process and wander (an Ornstein-Uhlenbeck
-  velocity) until they leave the view or their time is up.
+  They arrive as a Poisson process, drift and loop, and vanish when their
+  time is up; the process is a pure function of time for its seed.
 
 All randomness comes from the ``numpy.random.Generator`` given to the
-renderer, in a fixed order, so a seed fixes every frame. Conventions: canvas
+renderer (or generators seeded from it), so a seed fixes every frame. Conventions: canvas
 pixels of ``citysim.render_canvas``; camera frame x right, y down, z forward
 (m); radiance in linear full-scale units.
 """
@@ -105,37 +105,88 @@ def draw_rain(
     cv2.add(img, layer, dst=img)
 
 
-@dataclass
-class Insect:
-    pos_cam_m: np.ndarray  # (3,) camera frame
-    vel_mps: np.ndarray  # (3,)
-    until_s: float
-
-
 INSECT_NEAR_M, INSECT_FAR_M = 0.15, 1.5
-INSECT_SPEED_MPS = 1.2
+INSECT_DRIFT_MPS = 0.6
+INSECT_WANDER_M = 0.15
+INSECT_LIFE_S = (0.5, 4.0)
 INSECT_SIZE_M = 0.012
 #: How far out of focus the lens is at 1 m, px of blur per (1/z) m^-1.
 DEFOCUS_PX_M = 1.2
 INSECT_RADIANCE_M2 = 0.3
+#: Insects are drawn per time window from a generator seeded by (seed, window): any frame can
+#: be rendered alone, in any order, and shows the same insects.
+INSECT_WINDOW_S = 2.0
+
+
+@dataclass(frozen=True)
+class Insect:
+    """One moth: a drift plus a looping wander (three sines), camera frame, m and s."""
+
+    born_s: float
+    dies_s: float
+    start_m: np.ndarray  # (3,)
+    drift_mps: np.ndarray  # (3,)
+    wander_m: np.ndarray  # (3,) amplitudes
+    wander_hz: np.ndarray  # (3,)
+    wander_rad: np.ndarray  # (3,) phases
+
+    def position_m(self, t_s: float) -> np.ndarray:
+        age = t_s - self.born_s
+        loop = np.sin(2.0 * math.pi * self.wander_hz * age + self.wander_rad) - np.sin(
+            self.wander_rad
+        )
+        return self.start_m + self.drift_mps * age + self.wander_m * loop
 
 
 class Insects:
-    """Moths in front of the lens; their state advances with every rendered frame."""
+    """Moths in front of the lens, a Poisson process of ``per_min`` arrivals; a deterministic
+    function of time for a given ``seed`` (no state carried between frames)."""
 
-    def __init__(self, per_min: float) -> None:
+    def __init__(self, per_min: float, seed: int) -> None:
         self.rate_per_s = per_min / 60.0
-        self.active: list[Insect] = []
-        self.last_t_s: float | None = None
+        self.seed = seed
+        self._windows: dict[int, tuple[Insect, ...]] = {}
 
-    def _spawn(self, canvas: Canvas, t_s: float, rng: np.random.Generator) -> Insect:
-        cam = canvas.camera
-        z = rng.uniform(INSECT_NEAR_M, INSECT_FAR_M)
-        u = rng.uniform(0.0, cam.width_px)
-        v = rng.uniform(0.0, cam.height_px)
-        pos = np.array([(u - cam.cx_px) / cam.fx_px * z, (v - cam.cy_px) / cam.fy_px * z, z])
-        vel = rng.normal(0.0, INSECT_SPEED_MPS, 3) * np.array([1.0, 1.0, 0.3])
-        return Insect(pos, vel, t_s + rng.uniform(0.5, 4.0))
+    def _window(self, canvas: Canvas, w: int) -> tuple[Insect, ...]:
+        if w not in self._windows:
+            rng = np.random.default_rng([self.seed, w])
+            cam = canvas.camera
+            out = []
+            for _ in range(rng.poisson(self.rate_per_s * INSECT_WINDOW_S)):
+                born = (w + rng.random()) * INSECT_WINDOW_S
+                z = rng.uniform(INSECT_NEAR_M, INSECT_FAR_M)
+                u, v = rng.uniform(0.0, cam.width_px), rng.uniform(0.0, cam.height_px)
+                start = np.array(
+                    [(u - cam.cx_px) / cam.fx_px * z, (v - cam.cy_px) / cam.fy_px * z, z]
+                )
+                out.append(
+                    Insect(
+                        born,
+                        born + rng.uniform(*INSECT_LIFE_S),
+                        start,
+                        rng.normal(0.0, INSECT_DRIFT_MPS, 3) * np.array([1.0, 1.0, 0.3]),
+                        INSECT_WANDER_M * rng.uniform(0.3, 1.0, 3) * np.array([1.0, 1.0, 0.3]),
+                        rng.uniform(1.0, 3.0, 3),
+                        rng.uniform(0.0, 2.0 * math.pi, 3),
+                    )
+                )
+            self._windows[w] = tuple(out)
+        return self._windows[w]
+
+    def active(self, canvas: Canvas, t_s: float) -> list[Insect]:
+        """The insects alive at time t (s >= 0)."""
+        if self.rate_per_s <= 0.0:
+            return []
+        last = math.floor(t_s / INSECT_WINDOW_S)
+        first = max(math.floor((t_s - INSECT_LIFE_S[1]) / INSECT_WINDOW_S), 0)
+        for old in [w for w in self._windows if w < first]:
+            del self._windows[old]  # the process only moves forward in the common case: forget
+        return [
+            bug
+            for w in range(first, last + 1)
+            for bug in self._window(canvas, w)
+            if bug.born_s <= t_s < bug.dies_s
+        ]
 
     def draw(
         self,
@@ -145,41 +196,22 @@ class Insects:
         exposure_s: float,
         emitter_power: float,
         ambient_light: float,
-        rng: np.random.Generator,
     ) -> None:
-        dt = 1.0 / canvas.camera.fps if self.last_t_s is None else max(t_s - self.last_t_s, 0.0)
-        self.last_t_s = t_s
-        if self.rate_per_s <= 0.0 and not self.active:
-            return
-        alive = []
-        for bug in self.active:
-            # Ornstein-Uhlenbeck velocity: erratic, but with a typical speed
-            theta = 2.0
-            bug.vel_mps = bug.vel_mps * math.exp(-theta * dt) + rng.normal(
-                0.0, INSECT_SPEED_MPS * math.sqrt(1.0 - math.exp(-2.0 * theta * dt)), 3
-            ) * np.array([1.0, 1.0, 0.3])
-            bug.pos_cam_m = bug.pos_cam_m + bug.vel_mps * dt
-            if t_s < bug.until_s and INSECT_NEAR_M * 0.5 < bug.pos_cam_m[2] < INSECT_FAR_M * 2:
-                alive.append(bug)
-        for _ in range(rng.poisson(self.rate_per_s * dt)):
-            alive.append(self._spawn(canvas, t_s, rng))
-        self.active = alive
-        for bug in alive:
-            self._draw_one(canvas, img, bug, exposure_s, emitter_power, ambient_light)
+        for bug in self.active(canvas, t_s):
+            now = bug.position_m(t_s)
+            before = bug.position_m(max(t_s - exposure_s, bug.born_s))
+            if INSECT_NEAR_M * 0.5 < now[2] < INSECT_FAR_M * 2 and before[2] > 0.05:
+                self._draw_one(canvas, img, now, before, emitter_power, ambient_light)
 
+    @staticmethod
     def _draw_one(
-        self,
         canvas: Canvas,
         img: np.ndarray,
-        bug: Insect,
-        exposure_s: float,
+        now: np.ndarray,
+        before: np.ndarray,
         emitter_power: float,
         ambient_light: float,
     ) -> None:
-        now = bug.pos_cam_m
-        before = now - bug.vel_mps * exposure_s
-        if before[2] <= 0.05:
-            before = now
         uv = canvas.cam_to_canvas(np.stack([now, before]))
         z = now[2]
         core_px = max(canvas.camera.fx_px * INSECT_SIZE_M / z, 1.0)
@@ -198,8 +230,8 @@ class Insects:
         )
         cv2.line(
             layer,
-            tuple(int(c) for c in a),
-            tuple(int(c) for c in b),
+            (int(a[0]), int(a[1])),
+            (int(b[0]), int(b[1])),
             1.0,
             int(round(core_px)),
             cv2.LINE_8,

@@ -111,6 +111,18 @@ def test_same_seed_same_frames_and_truth_bit_for_bit() -> None:
     assert not np.array_equal(other.image, runs[0][0].image)
 
 
+def test_indexed_frames_do_not_depend_on_the_frames_rendered_before() -> None:
+    params = RenderParams(rain_drops_per_frame=30, insects_per_min=1200.0)
+    agents = one_of_each(14.0)
+    in_order = renderer(params, seed=5)
+    frames = [in_order.render(k / 15.0, agents, [1.0, 0.0], frame_index=k) for k in range(6)]
+    alone = renderer(params, seed=5).render(5 / 15.0, agents, [1.0, 0.0], frame_index=5)
+    assert np.array_equal(alone.image, frames[5].image) and alone.truth == frames[5].truth
+    assert not np.array_equal(frames[4].image, frames[5].image)  # new noise every frame
+    with pytest.raises(ValueError, match="frame_index"):
+        in_order.render(0.0, [], [0.0, 0.0], frame_index=-1)
+
+
 # ------------------------------------------------------------------ ground truth geometry
 @pytest.mark.parametrize("index", range(5))
 def test_truth_box_is_the_rendered_silhouette(index: int) -> None:
