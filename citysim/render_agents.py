@@ -197,25 +197,32 @@ class AgentPainter:
         anchors = np.array([[a.x_m, a.y_m, 0.5 * a.height_m] for a in agents])
         agent_dist, motion = self._distance_and_motion(agents, anchors)
         drawn: list[DrawnAgent] = []
-        for i in np.argsort(-agent_dist, kind="stable"):
+        number = np.arange(len(corners)) - starts[owner]  # each part's place within its agent
+        dist_l, lo_l, hi_l, motion_l = (
+            agent_dist.tolist(),
+            lo.tolist(),
+            hi.tolist(),
+            motion.tolist(),
+        )
+        for i in np.argsort(-agent_dist, kind="stable").tolist():
             if behind[i]:
                 continue
             parts = order[starts[i] : starts[i + 1]]
             if in_front[i]:
-                polys = [fixed[k] for k in parts]
-                box_lo, box_hi = lo[i], hi[i]
+                polys = fixed[parts]
+                box_lo, box_hi = lo_l[i], hi_l[i]
             else:
                 polys, box_lo, box_hi = self._clipped_polygons(cam_pts[parts])
                 if not polys:
                     continue
             result = self._paint_one(
-                int(i),
-                float(agent_dist[i]),
-                motion[i],
+                i,
+                dist_l[i],
+                motion_l[i],
                 box_lo,
                 box_hi,
                 polys,
-                parts - starts[i],
+                number[parts],
                 radiance[parts],
                 img,
                 occluder_depth,
@@ -257,7 +264,7 @@ class AgentPainter:
 
     def _clipped_polygons(
         self, cam_pts: np.ndarray
-    ) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    ) -> tuple[list[np.ndarray], list[float], list[float]]:
         """Fixed-point canvas vertices of each part cut at the near plane (an empty array for a
         part wholly behind the camera), and the float bounds of what is left."""
         polys, pts = [], []
@@ -270,18 +277,18 @@ class AgentPainter:
             pts.append(uv)
             polys.append(np.rint(uv * (1 << SUBPIXEL_BITS)).astype(np.int32))
         if not pts:
-            return [], np.zeros(2), np.zeros(2)
+            return [], [0.0, 0.0], [0.0, 0.0]
         allpts = np.concatenate(pts)
-        return polys, allpts.min(axis=0), allpts.max(axis=0)
+        return polys, allpts.min(axis=0).tolist(), allpts.max(axis=0).tolist()
 
     def _paint_one(
         self,
         index: int,
         agent_dist_m: float,
-        motion_px: np.ndarray,
-        lo: np.ndarray,
-        hi: np.ndarray,
-        polys: list[np.ndarray],
+        motion_px: Sequence[float],
+        lo: Sequence[float],
+        hi: Sequence[float],
+        polys: Sequence[np.ndarray],
         part_numbers: np.ndarray,
         radiance: np.ndarray,
         img: np.ndarray,
@@ -289,7 +296,7 @@ class AgentPainter:
         labels: np.ndarray,
     ) -> DrawnAgent | None:
         """Draw one agent whose parts ``polys`` (fixed-point canvas vertices) come far to near."""
-        du, dv = float(motion_px[0]), float(motion_px[1])
+        du, dv = motion_px
         blur = math.hypot(du, dv) >= MIN_BLUR_PX
         pad = int(math.ceil(max(abs(du), abs(dv)))) + 2 if blur else 1
         h, w = self.canvas.shape
