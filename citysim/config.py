@@ -33,6 +33,7 @@ __all__ = [
     "NetworkSpec",
     "Scenario",
     "ScenarioError",
+    "SimulationSpec",
     "load_scenario",
     "override",
     "scenario_from_mapping",
@@ -75,6 +76,18 @@ class NetworkSpec(Spec):
         default=3.0, gt=0, le=600, description="a lit lamp repeats its message this often"
     )
     neighbours_ahead: NeighboursAhead = NeighboursAhead()
+
+
+class SimulationSpec(Spec):
+    """How hard the simulator looks: trade exactness for speed, never the traffic."""
+
+    idle_frame_stride: int = Field(
+        default=5,
+        ge=1,
+        le=30,
+        description="an idle lamp camera (nobody in view, steady light, no motion in its last judged "
+        "frame) is judged every n-th frame; 1 judges every frame of every camera (exact, slow)",
+    )
 
 
 class ScheduleStep(Spec):
@@ -144,6 +157,7 @@ class Scenario(Spec):
     traffic: TrafficSpec = TrafficSpec()
     environment: EnvironmentSpec = EnvironmentSpec()
     network: NetworkSpec = NetworkSpec()
+    simulation: SimulationSpec = SimulationSpec()
     controllers: tuple[ControllerSpec, ...] = (ControllerSpec(name="always_on"),)
 
     @model_validator(mode="before")
