@@ -36,8 +36,10 @@ __all__ = ["ROUTE_PLANNERS", "arrivals", "draw_arrival", "start_traffic"]
 ENTRY_MARGIN_M = 0.3
 #: Clearance walkers keep from a sidewalk's edges when not passing anyone, m.
 EDGE_CLEARANCE_M = 0.05
-#: Half-width of the strip a crossing walker's centre may use, m.
+#: Half-width of the strip a crossing walker keeps to, m; ...
 CROSSING_HALF_WIDTH_M = 0.8
+#: ... and how far aside its centre may step to get round a car stopped in its way, m.
+CROSSING_DETOUR_M = 2.5
 
 
 def _along_x(street: Street, y_m: float, direction: int, reach_m: float) -> tuple[tuple, tuple]:
@@ -107,10 +109,10 @@ def _walker_route(
         x_land = float(np.clip(x_land, lo, hi))
     onward = direction if rng.random() < 0.7 else -direction
     x_end = street.length_m + reach if onward > 0 else -reach
-    half = max(0.0, CROSSING_HALF_WIDTH_M - traits.width_m / 2)
-    comfort = min(0.3, half)
+    comfort = min(0.3, max(0.0, CROSSING_HALF_WIDTH_M - traits.width_m / 2))
     crossing = Leg(
-        (x_cross, sw.y_center_m), (x_land, other.y_center_m), (-half, half), (-comfort, comfort),
+        (x_cross, sw.y_center_m), (x_land, other.y_center_m),
+        (-CROSSING_DETOUR_M, CROSSING_DETOUR_M), (-comfort, comfort),
         float(np.clip(-0.2, -comfort, comfort)), yield_to_traffic=True,
     )  # fmt: skip
     legs = (
@@ -167,7 +169,7 @@ def _animal_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generat
         (float(np.clip(x + rng.uniform(-5.0, 5.0), 2.0, street.length_m - 2.0)), verge[end_side])
     )
     legs = tuple(
-        Leg(a, b, (-0.3, 0.3), (-0.1, 0.1), 0.0)
+        Leg(a, b, (-1.5, 1.5), (-0.1, 0.1), 0.0)  # wide band: room to get round a stopped car
         for a, b in zip(points[:-1], points[1:], strict=True)
         if a != b
     )
