@@ -5,6 +5,7 @@ from pathlib import Path
 import pytest
 
 from citysim.config import load_scenario
+from citysim.control import CONTROLLERS
 from citysim.street import build_street
 from detector.camera import CameraModel
 
@@ -32,7 +33,8 @@ def test_scenario_loads_and_builds(path):
         cam = lamp.camera
         assert (cam.x_m, cam.y_m) == (lamp.x_m, lamp.y_m)
         assert cam.bottom_row_depression_deg > 0  # sees the ground
-    assert scenario.controllers
+    unknown = [c.name for c in scenario.controllers if c.name not in CONTROLLERS]
+    assert not unknown, f"{path.name}: controllers {unknown} are not in {sorted(CONTROLLERS)}"
 
 
 @pytest.mark.parametrize("path", CAMERAS, ids=lambda p: p.name)
