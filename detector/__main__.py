@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import math
 import sys
 from pathlib import Path
 
@@ -29,14 +30,24 @@ USER_ERRORS = (CameraError, VideoError, FileNotFoundError, ValueError)
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
                  max_width_px: int = 424, max_distance_m: float = 25.0, progress: bool = True) -> dict:
     """Run the detector over a video; returns a small summary dict (also printed by the CLI)."""
-    from detector.classifier import DimensionalClassifier, default_model
+    from detector.classifier import DimensionalClassifier, default_model, train_camera_model
     from detector.detector import Detector
     from detector.draw import draw_detections
 
     camera = CameraModel.from_yaml(camera_file)
     info = probe_video(video)
     cam = camera_for_video(camera, info, max_width_px, camera_source=str(camera_file))
-    model = DimensionalClassifier.load(model_path) if model_path else default_model()
+    if model_path:
+        model = DimensionalClassifier.load(model_path)
+    elif general_model_covers(cam):
+        model = default_model()
+    else:
+        # a steep or low camera that never sees 25 m ahead lies outside what the general model was
+        # trained on; a model for this very camera is a few seconds away and clearly better there
+        print(f"note: {camera_file} sees only {view_range_m(cam):.1f} m ahead, outside the general model's "
+              f"cameras (2-10 m high, seeing >= 25 m); training a model for this camera "
+              f"(save one with 'python -m detector train' to skip this)", file=sys.stderr)
+        model = train_camera_model(cam)
     detector = Detector(cam, model=model, max_distance_m=max_distance_m)
     size = (cam.width_px, cam.height_px)
     counts: dict[str, int] = {}
@@ -66,6 +77,24 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
             writer.release()
     return {"frames": n_frames, "frames_with_target": frames_with_target, "regions_per_class": counts,
             "processing_size_px": size, "out_dir": str(out_dir)}
+
+
+def view_range_m(camera: CameraModel) -> float:
+    """How far ahead the top image row meets the ground (inf when the horizon is in view), m."""
+    top_depression_deg = camera.tilt_deg - camera.vertical_fov_deg / 2
+    if top_depression_deg <= 0:
+        return math.inf
+    return camera.height_m / math.tan(math.radians(top_depression_deg))
+
+
+def general_model_covers(camera: CameraModel) -> bool:
+    """Is the camera like those the general model was trained on (see detector.training.TrainingConfig)?"""
+    from detector.training import TrainingConfig
+
+    config = TrainingConfig()
+    lo_h, hi_h = config.camera_height_m
+    lo_t, hi_t = config.tilt_deg
+    return lo_h <= camera.height_m <= hi_h and lo_t <= camera.tilt_deg <= hi_t and view_range_m(camera) >= config.min_view_range_m
 
 
 def train_camera(camera_file: Path, out_path: Path, seed: int = 0) -> Path:

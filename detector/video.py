@@ -8,7 +8,10 @@ it. The camera's intrinsics are in millimetres, so a new ``width_px`` /
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -31,16 +34,32 @@ class VideoInfo:
     frame_count: int  # as the container reports it; may be approximate
 
 
+@contextmanager
+def quiet_stderr() -> Iterator[None]:
+    """Silence C libraries (FFmpeg) writing to fd 2, so a bad file gives our one message only."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def probe_video(path: str | Path) -> VideoInfo:
     """Open a video and decode its first frame; raise VideoError if that fails."""
     path = Path(path)
     if not path.is_file():
         raise VideoError(f"{path}: video file not found")
-    cap = cv2.VideoCapture(str(path))
+    with quiet_stderr():
+        cap = cv2.VideoCapture(str(path))
     try:
         if not cap.isOpened():
             raise VideoError(f"{path}: cannot open as a video (valid: a file OpenCV's FFmpeg backend can decode, e.g. .mp4 .avi)")
-        ok, frame = cap.read()
+        with quiet_stderr():
+            ok, frame = cap.read()
         if not ok or frame is None:
             raise VideoError(f"{path}: no frame could be decoded (corrupt or empty video)")
         fps = cap.get(cv2.CAP_PROP_FPS) or 0.0
