@@ -235,6 +235,14 @@ class Scenario(Spec):
                     ("traffic", "classes", spec.kind, "crossing_fraction"),
                     "crossing needs a sidewalk on each side of the road; set 0 or add one",
                 )
+        for i, agent in enumerate(self.traffic.scripted):
+            paths = street.lanes if agent.cls in ("cyclist", "vehicle") else street.sidewalks
+            kind = "street.lanes" if agent.cls in ("cyclist", "vehicle") else "street.sidewalks"
+            if agent.path >= len(paths):
+                raise FieldPathError(
+                    ("traffic", "scripted", i, "path"),
+                    f"{agent.cls} path {agent.path} does not exist; valid: 0..{len(paths) - 1} ({kind})",
+                )
         for spec in (classes.cyclist, classes.vehicle):
             if spec.rate_per_hour > 0 and not street.lanes:
                 raise FieldPathError(

@@ -300,7 +300,16 @@ class LampsSpec(Spec):
         return self._camera_model
 
     def zones(self, length_m: float) -> tuple[tuple[float, float], ...]:
-        """(start, end) x of each lamp's zone: half-way to the neighbours, clipped to the street, m."""
+        """(start, end) x of each lamp's zone: half-way to the neighbours, clipped to the street, m.
+
+        The end lamps reach half a spacing beyond themselves, no further: street beyond the chain is
+        an approach lit by other streets' lamps (not simulated), where the end cameras can see what
+        comes. A lone lamp is responsible for the whole street.
+        """
         xs = self.positions_x_m
-        cuts = [0.0] + [(a + b) / 2 for a, b in zip(xs[:-1], xs[1:], strict=True)] + [length_m]
+        if len(xs) == 1:
+            return ((0.0, length_m),)
+        first = max(0.0, xs[0] - (xs[1] - xs[0]) / 2)
+        last = min(length_m, xs[-1] + (xs[-1] - xs[-2]) / 2)
+        cuts = [first] + [(a + b) / 2 for a, b in zip(xs[:-1], xs[1:], strict=True)] + [last]
         return tuple((cuts[i], cuts[i + 1]) for i in range(len(xs)))

@@ -9,7 +9,7 @@ given in km/h or m/s; nothing moves faster than 60 km/h.
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import ClassVar, Literal
 
 from pydantic import Field, model_validator
 
@@ -202,5 +202,21 @@ class TrafficClasses(Spec):
         return (self.pedestrian, self.group, self.cyclist, self.vehicle, self.animal)
 
 
+class ScriptedAgent(Spec):
+    """One agent that enters at a set time: a test object for a planner (a 60 km/h car at 22:05)."""
+
+    cls: Literal["pedestrian", "group", "cyclist", "vehicle"]
+    t_s: float = Field(ge=0, description="simulated time it enters the street, s")
+    speed_kmh: float = Field(gt=0, le=MAX_SPEED_KMH, description="its desired speed")
+    direction: Literal[1, -1] = Field(default=1, description="+1: toward +x, -1: toward -x")
+    path: int = Field(
+        default=0, ge=0, description="index of its lane (cyclist, vehicle) or sidewalk (walkers)"
+    )
+    light_on: bool | None = Field(default=None, description="headlight/flashlight; default: at night for lit classes")
+
+
 class TrafficSpec(Spec):
     classes: TrafficClasses = TrafficClasses()
+    scripted: tuple[ScriptedAgent, ...] = Field(
+        default=(), description="agents that enter at set times, on top of the random arrivals"
+    )

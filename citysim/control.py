@@ -52,8 +52,15 @@ class LampBank:
     def __init__(self, ctx: ControlContext):
         self.ctx = ctx
         self.lit_until_s = np.full(len(ctx.lamps), -math.inf)
+        self.first_trigger_s = np.full(len(ctx.lamps), math.nan)
+        self.last_trigger_s = np.full(len(ctx.lamps), math.nan)
+        self.triggers = np.zeros(len(ctx.lamps), dtype=np.int64)
 
     def trigger(self, lamp_index: int, t_s: float, hold_s: float | None = None) -> None:
+        if self.triggers[lamp_index] == 0:
+            self.first_trigger_s[lamp_index] = t_s
+        self.last_trigger_s[lamp_index] = t_s
+        self.triggers[lamp_index] += 1
         until = t_s + (self.ctx.hold_s if hold_s is None else hold_s)
         if until > self.lit_until_s[lamp_index]:
             self.lit_until_s[lamp_index] = until

@@ -304,9 +304,16 @@ def run_controller(
                             "unlit_crossings": s["unlit_crossings"]}
                       for cls, s in zsum["by_class"].items()},
         "detection": confusion.summary() if controller_cls.uses_camera and confusion.frames else {},
+        "lamp_triggers": [{"lamp": i, "triggers": int(controller.bank.triggers[i]),
+                           "first_s": _finite(controller.bank.first_trigger_s[i]),
+                           "last_s": _finite(controller.bank.last_trigger_s[i])} for i in range(len(lamps))],
         "network": {"sent": network.stats.sent, "delivered": network.stats.delivered, "lost": network.stats.lost},
         "agents_spawned": world.spawned_count,
     }
+
+
+def _finite(x: float) -> float | None:
+    return None if math.isnan(x) else float(x)
 
 
 def write_object_rows(writer: csv.writer, label: str, zones: ZoneTracker) -> None:

@@ -19,11 +19,12 @@ the direction of travel (see ``citysim.world_geometry``).
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
+from dataclasses import replace
 
 import numpy as np
 import simpy
 
-from citysim.agents import AgentTraits, draw_agent
+from citysim.agents import AGENT_KINDS, AgentTraits, DrawOptions, SpeedDistribution, draw_agent
 from citysim.config import Scenario
 from citysim.config_traffic import TrafficClassSpec
 from citysim.street import Lane, Sidewalk, Street
@@ -215,6 +216,43 @@ def arrivals(
             world.spawn(*draw_arrival(world.street, spec, rng, night=night))
 
 
+def scripted_arrival(street: Street, agent, night: bool) -> tuple[AgentTraits, Route]:
+    """The traits and route of one scripted agent (``config_traffic.ScriptedAgent``).
+
+    Its looks are the middle of its class's Table 1 ranges, so a scripted run is the same
+    whatever the random traffic does; it keeps its lane or sidewalk from end to end.
+    """
+    kind = AGENT_KINDS[agent.cls]
+    speed_mps = agent.speed_kmh / 3.6
+    light = (night and agent.cls in ("cyclist", "vehicle")) if agent.light_on is None else agent.light_on
+    fixed = np.random.default_rng(0)  # the looks of a scripted agent never depend on the scenario seed
+    drawn = draw_agent(agent.cls, fixed, DrawOptions(speed=SpeedDistribution(speed_mps, speed_mps), night=night))
+    traits = replace(
+        drawn,
+        width_m=float(np.mean(kind.width_m)) if agent.cls != "group" else drawn.width_m,
+        height_m=float(np.mean(kind.height_m)),
+        desired_speed_mps=speed_mps,
+        light_on=light,
+    )
+    if agent.cls in ("cyclist", "vehicle"):
+        lane = replace(street.lanes[agent.path], direction=agent.direction)
+        band = (-0.2, 0.2)
+        leg = _lane_leg(street, lane, traits, band, band, 0.0)
+        return traits, Route((leg,), f"lane{agent.path}")
+    sw = street.sidewalks[agent.path]
+    reach = max(traits.length_m, traits.width_m) / 2 + ENTRY_MARGIN_M
+    (x_in, _), (x_out, _) = _along_x(street, sw.y_center_m, agent.direction, reach)
+    leg = _sidewalk_leg(street, sw, x_in, x_out, traits.width_m, fixed)
+    return traits, Route((leg,), f"sidewalk{agent.path}{'+' if agent.direction > 0 else '-'}")
+
+
+def scripted_arrivals(env: simpy.Environment, world: World, scenario: Scenario) -> Generator:
+    """simpy process: spawn the scenario's scripted agents at their times."""
+    for agent in sorted(scenario.traffic.scripted, key=lambda a: a.t_s):
+        yield env.timeout(max(0.0, agent.t_s - env.now))
+        world.spawn(*scripted_arrival(world.street, agent, scenario.night))
+
+
 def start_traffic(
     env: simpy.Environment, world: World, scenario: Scenario, rng: np.random.Generator
 ) -> list[simpy.Process]:
@@ -222,8 +260,11 @@ def start_traffic(
     (so adding a class, or a renderer drawing noise, never reshuffles another class)."""
     specs = scenario.traffic.classes.all()
     children = rng.spawn(len(specs))
-    return [
+    processes = [
         env.process(arrivals(env, world, spec, child, night=scenario.night))
         for spec, child in zip(specs, children, strict=True)
         if spec.rate_per_hour > 0
     ]
+    if scenario.traffic.scripted:
+        processes.append(env.process(scripted_arrivals(env, world, scenario)))
+    return processes

@@ -23,9 +23,12 @@ def test_scenario_loads_and_builds(path):
     scenario = load_scenario(path)
     street = build_street(scenario)
     assert len(street.lamps) == len(scenario.lamps.positions_x_m) >= 1
-    # zones tile the street exactly, in lamp order
-    assert street.lamps[0].zone_start_m == 0.0
-    assert street.lamps[-1].zone_end_m == pytest.approx(street.length_m)
+    # zones tile the lamp chain in lamp order, within the street; an end lamp reaches half a
+    # spacing beyond itself (what lies further is an approach lit by other streets)
+    first, last = street.lamps[0], street.lamps[-1]
+    assert 0.0 <= first.zone_start_m <= first.x_m and last.x_m <= last.zone_end_m <= street.length_m
+    if len(street.lamps) > 1:
+        assert first.x_m - first.zone_start_m == pytest.approx(min(first.x_m, (street.lamps[1].x_m - first.x_m) / 2))
     for a, b in zip(street.lamps[:-1], street.lamps[1:], strict=True):
         assert a.zone_end_m == b.zone_start_m
         assert a.zone_start_m <= a.x_m <= a.zone_end_m

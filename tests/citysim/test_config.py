@@ -58,8 +58,10 @@ def test_lamp_chain_and_zones(suburban):
     xs = suburban.lamps.positions_x_m
     assert len(xs) >= 10 and all(b - a == 30 for a, b in zip(xs[:-1], xs[1:], strict=True))
     zones = suburban.lamps.zones(suburban.street.length_m)
-    assert zones[0][0] == 0 and zones[-1][1] == suburban.street.length_m
-    assert zones[1] == (30.0, 60.0)  # half-way to each neighbour
+    # the end lamps reach half a spacing beyond themselves; the street's ends are approaches
+    assert zones[0] == (xs[0] - 15.0, xs[0] + 15.0) and zones[-1] == (xs[-1] - 15.0, xs[-1] + 15.0)
+    assert zones[1] == (xs[1] - 15.0, xs[1] + 15.0)  # half-way to each neighbour
+    assert all(a[1] == b[0] for a, b in zip(zones[:-1], zones[1:], strict=True))
 
 
 def test_animal_rate_is_one_number(suburban, raw):
@@ -180,7 +182,7 @@ BAD_FIELDS = [
     ("lamps.count", 20, "lamps.count", "outside the street"),
     ("street.lanes.1.y_center_m", -1.0, "street.lanes.1.y_center_m", "overlaps"),
     ("street.lanes.0.direction", 2, "street.lanes.0.direction", "+1"),
-    ("street.crossings_x_m", [5], "street.crossings_x_m.0", "within 10..320"),
+    ("street.crossings_x_m", [5], "street.crossings_x_m.0", "within 10..380"),
     ("controllers", ["always_on", "always_on"], "controllers.1.label", "used twice"),
     ("controllers", [{"name": "detector", "k": 4, "n": 3}], "controllers.0.k", "<= n"),
     ("controllers", ["Always On"], "controllers.0.name", "pattern"),
