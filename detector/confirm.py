@@ -94,7 +94,17 @@ class Tracker:
     most ``max_distance_diag``. A track unseen for more than
     ``max_missed_frames`` frames is dropped. ``velocity_smoothing`` in (0, 1]
     is the weight of the newest displacement in the velocity estimate.
+
+    A lamp's frame holds a handful of boxes and tracks, so the state lives in
+    Python lists and pairs are scored in plain Python (numpy's per-call cost
+    would be most of the work); past ``SCALAR_MAX_PAIRS`` pairs the scores are
+    one vectorised computation. The array attributes (``ids``, ``boxes_px``,
+    ``velocities_px``, ``missed``, ``sightings``, ``history_bits``) are
+    snapshots built on access.
     """
+
+    #: up to this many track x box pairs are scored in plain Python
+    SCALAR_MAX_PAIRS = 64
 
     def __init__(
         self,
@@ -129,65 +139,143 @@ class Tracker:
         self.max_distance_diag = float(max_distance_diag)
         self.velocity_smoothing = float(velocity_smoothing)
         self.confirm_k, self.confirm_n = int(confirm_k), int(confirm_n)
+        self._window_mask = (1 << self.confirm_n) - 1
         self.reset()
 
     def reset(self) -> None:
         """Forget every track (ids keep counting up, so an old id never comes back)."""
-        self.ids = np.zeros(0, np.int64)
-        self.boxes_px = np.zeros((0, 4))  # last observed box per track
-        self.velocities_px = np.zeros((0, 2))  # px per frame
-        self.missed = np.zeros(0, np.int64)  # frames since last seen
-        self.sightings = np.zeros(0, np.int64)  # frames in which the track was matched
+        self._ids: list[int] = []
+        self._boxes: list[list[float]] = []  # last observed (x, y, w, h) per track, px
+        self._velocities: list[list[float]] = []  # px per frame
+        self._missed: list[int] = []  # frames since last seen
+        self._sightings: list[int] = []  # frames in which the track was matched
         # the last n target decisions per track as bits, newest in bit 0
-        self.history_bits = np.zeros(0, np.uint64)
+        self._bits: list[int] = []
         if not hasattr(self, "_next_id"):
             self._next_id = 1
 
     def __len__(self) -> int:
-        return len(self.ids)
+        return len(self._ids)
+
+    # ------------------------------------------------------------ snapshots
+    @property
+    def ids(self) -> np.ndarray:
+        """(T,) int64 track ids."""
+        return np.array(self._ids, np.int64)
+
+    @property
+    def boxes_px(self) -> np.ndarray:
+        """(T, 4) last observed box per track."""
+        return np.array(self._boxes, np.float64).reshape(-1, 4)
+
+    @property
+    def velocities_px(self) -> np.ndarray:
+        """(T, 2) px per frame."""
+        return np.array(self._velocities, np.float64).reshape(-1, 2)
+
+    @property
+    def missed(self) -> np.ndarray:
+        """(T,) frames since each track was last seen."""
+        return np.array(self._missed, np.int64)
+
+    @property
+    def sightings(self) -> np.ndarray:
+        """(T,) frames in which each track was matched."""
+        return np.array(self._sightings, np.int64)
+
+    @property
+    def history_bits(self) -> np.ndarray:
+        """(T,) uint64: the last n target decisions, newest in bit 0."""
+        return np.array(self._bits, np.uint64)
 
     @property
     def confirmed(self) -> np.ndarray:
         """(T,) bool: tracks with at least k target frames among their last n."""
-        return np.bitwise_count(self.history_bits) >= self.confirm_k
+        return np.array([b.bit_count() >= self.confirm_k for b in self._bits], bool)
 
     def confirmed_ids(self) -> set[int]:
-        return {int(i) for i in self.ids[self.confirmed]}
+        k = self.confirm_k
+        return {i for i, b in zip(self._ids, self._bits, strict=True) if b.bit_count() >= k}
 
     def is_confirmed(self, track_id: int) -> bool:
         return track_id in self.confirmed_ids()
 
     def predicted_boxes_px(self) -> np.ndarray:
         """(T, 4) where each track is expected in the next frame."""
-        out = self.boxes_px.copy()
-        out[:, :2] += self.velocities_px * (self.missed + 1)[:, None]
-        return out
+        return np.array(self._predicted(), np.float64).reshape(-1, 4)
 
-    def _match(self, boxes: np.ndarray) -> np.ndarray:
-        """Greedy assignment: (N,) index of each box's track, -1 for none."""
-        t, n = len(self.ids), len(boxes)
-        track_of = np.full(n, -1, np.intp)
-        if t == 0 or n == 0:
-            return track_of
-        pred = self.predicted_boxes_px()
-        iou = box_iou(pred, boxes)
-        gap = (pred[:, None, :2] + pred[:, None, 2:] / 2) - (
-            boxes[None, :, :2] + boxes[None, :, 2:] / 2
-        )
-        diag = np.maximum(np.hypot(pred[:, 2], pred[:, 3]), 1.0)
+    def _predicted(self) -> list[tuple[float, float, float, float]]:
+        return [
+            (x + vx * (m + 1), y + vy * (m + 1), w, h)
+            for (x, y, w, h), (vx, vy), m in zip(
+                self._boxes, self._velocities, self._missed, strict=True
+            )
+        ]
+
+    # ------------------------------------------------------------- matching
+    def _scores(self, pred: list, boxes: list) -> list[tuple[float, int, int]]:
+        """Allowed (score, track, box) pairs, in row-major order."""
+        max_d = self.max_distance_diag
+        max_d_floor = max(max_d, 1e-9)
+        min_iou = self.min_iou
+        # per box: right and bottom edges, area, centre
+        extents = [
+            (bx + bw, by + bh, bw * bh, bx + bw / 2, by + bh / 2) for bx, by, bw, bh in boxes
+        ]
+        pairs = []
+        for ti, (px, py, pw, ph) in enumerate(pred):
+            p_right, p_bottom, p_area = px + pw, py + ph, pw * ph
+            pcx, pcy = px + pw / 2, py + ph / 2
+            diag = max(math.hypot(pw, ph), 1.0)
+            for di, (bx, by, _, _) in enumerate(boxes):
+                b_right, b_bottom, b_area, bcx, bcy = extents[di]
+                dist = math.hypot(pcx - bcx, pcy - bcy) / diag
+                iw = min(p_right, b_right) - max(px, bx)
+                ih = min(p_bottom, b_bottom) - max(py, by)
+                if dist > max_d and min_iou > 0.0 and (iw <= 0.0 or ih <= 0.0):
+                    continue  # far apart and no overlap: IoU 0 < min_iou
+                inter = (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)
+                union = p_area + b_area - inter
+                iou = inter / union if union > 0 else 0.0
+                if iou < min_iou and dist > max_d:
+                    continue
+                near = 1.0 - dist / max_d_floor
+                pairs.append((iou + (near if near > 0.0 else 0.0), ti, di))
+        return pairs
+
+    def _scores_vectorised(self, pred: list, boxes: list) -> list[tuple[float, int, int]]:
+        """``_scores`` for many pairs: one numpy computation over the (T, N) matrix."""
+        p = np.array(pred, np.float64)
+        b = np.array(boxes, np.float64)
+        iou = box_iou(p, b)
+        gap = (p[:, None, :2] + p[:, None, 2:] / 2) - (b[None, :, :2] + b[None, :, 2:] / 2)
+        diag = np.maximum(np.hypot(p[:, 2], p[:, 3]), 1.0)
         dist = np.hypot(gap[..., 0], gap[..., 1]) / diag[:, None]
         score = iou + np.clip(1.0 - dist / max(self.max_distance_diag, 1e-9), 0.0, None)
-        score[(iou < self.min_iou) & (dist > self.max_distance_diag)] = -np.inf
-        for _ in range(min(t, n)):
-            flat = int(np.argmax(score))
-            ti, di = divmod(flat, n)
-            if score[ti, di] == -np.inf:
-                break
-            track_of[di] = ti
-            score[ti, :] = -np.inf
-            score[:, di] = -np.inf
+        ti, di = np.nonzero((iou >= self.min_iou) | (dist <= self.max_distance_diag))
+        return list(zip(score[ti, di].tolist(), ti.tolist(), di.tolist(), strict=True))
+
+    def _match(self, boxes: list) -> list[int]:
+        """Greedy assignment: each box's track index, -1 for none."""
+        track_of = [-1] * len(boxes)
+        if not self._ids or not boxes:
+            return track_of
+        pred = self._predicted()
+        if len(pred) * len(boxes) > self.SCALAR_MAX_PAIRS:
+            pairs = self._scores_vectorised(pred, boxes)
+        else:
+            pairs = self._scores(pred, boxes)
+        # best pair first, ties in row-major order: the same choices as taking the argmax
+        # of the score matrix again and again with matched rows and columns struck out
+        pairs.sort(key=lambda pair: -pair[0])
+        taken = set()
+        for _, ti, di in pairs:
+            if ti not in taken and track_of[di] < 0:
+                track_of[di] = ti
+                taken.add(ti)
         return track_of
 
+    # --------------------------------------------------------------- update
     def update(self, boxes_px: np.ndarray, is_target: np.ndarray | None = None) -> np.ndarray:
         """Associate this frame's (N, 4) boxes; return their (N,) track ids.
 
@@ -200,46 +288,66 @@ class Tracker:
         hits = np.zeros(n, bool) if is_target is None else np.asarray(is_target, bool).reshape(-1)
         if len(hits) != n:
             raise ValueError(f"Tracker.update: is_target has {len(hits)} entries for {n} boxes")
-        track_of = self._match(boxes)
-        matched = track_of >= 0
-        ti, di = track_of[matched], np.flatnonzero(matched)
+        return np.array(self.update_rows(boxes.tolist(), hits.tolist()), np.int64)
 
-        self.history_bits = (self.history_bits << np.uint64(1)) & np.uint64(
-            (1 << self.confirm_n) - 1
+    def update_rows(self, boxes_px: list, is_target: list[bool]) -> list[int]:
+        """``update`` on plain Python rows: N (x, y, w, h) sequences and N bools; N track ids.
+
+        The detector's per-frame entry point (no array round trip); the caller
+        guarantees equal lengths.
+        """
+        track_of = self._match(boxes_px)
+        mask = self._window_mask
+        bits = [(b << 1) & mask for b in self._bits]
+        missed = [m + 1 for m in self._missed]
+        ids, tracks_boxes, velocities, sightings = (
+            self._ids,
+            self._boxes,
+            self._velocities,
+            self._sightings,
         )
-        self.missed += 1
-        if len(ti):
+        a = self.velocity_smoothing
+        ids_out = [0] * len(boxes_px)
+        new = []
+        for di, ti in enumerate(track_of):
+            if ti < 0:
+                new.append(di)
+                continue
+            x, y, w, h = box = boxes_px[di]
+            ox, oy, ow, oh = tracks_boxes[ti]
             # velocity from the displacement since the track was last seen
-            step = (boxes[di, :2] + boxes[di, 2:] / 2) - (
-                self.boxes_px[ti, :2] + self.boxes_px[ti, 2:] / 2
-            )
-            step /= self.missed[ti][:, None]
-            a = self.velocity_smoothing
-            # a track seen once has no velocity yet: take its first displacement whole
-            first = (self.sightings[ti] == 1)[:, None]
-            self.velocities_px[ti] = np.where(
-                first, step, a * step + (1 - a) * self.velocities_px[ti]
-            )
-            self.sightings[ti] += 1
-            self.boxes_px[ti] = boxes[di]
-            self.missed[ti] = 0
-            self.history_bits[ti] |= hits[di].astype(np.uint64)
-
-        ids_out = np.empty(n, np.int64)
-        ids_out[di] = self.ids[ti]
-        new = np.flatnonzero(~matched)
-        expired = self.missed > self.max_missed_frames
-        if len(new) == 0 and not expired.any():
+            m = missed[ti]
+            sx = ((x + w / 2) - (ox + ow / 2)) / m
+            sy = ((y + h / 2) - (oy + oh / 2)) / m
+            if sightings[ti] == 1:  # seen once: no velocity yet, take the first displacement whole
+                velocities[ti] = [sx, sy]
+            else:
+                vx, vy = velocities[ti]
+                velocities[ti] = [a * sx + (1 - a) * vx, a * sy + (1 - a) * vy]
+            sightings[ti] += 1
+            tracks_boxes[ti] = list(box)
+            missed[ti] = 0
+            bits[ti] |= bool(is_target[di])
+            ids_out[di] = ids[ti]
+        self._bits, self._missed = bits, missed
+        limit = self.max_missed_frames
+        if not new and all(m <= limit for m in missed):
             return ids_out
         # unmatched boxes start tracks; long-unseen tracks end
-        new_ids = np.arange(self._next_id, self._next_id + len(new), dtype=np.int64)
-        self._next_id += len(new)
-        ids_out[new] = new_ids
-        keep = ~expired
-        self.ids = np.concatenate([self.ids[keep], new_ids])
-        self.boxes_px = np.concatenate([self.boxes_px[keep], boxes[new]])
-        self.velocities_px = np.concatenate([self.velocities_px[keep], np.zeros((len(new), 2))])
-        self.missed = np.concatenate([self.missed[keep], np.zeros(len(new), np.int64)])
-        self.sightings = np.concatenate([self.sightings[keep], np.ones(len(new), np.int64)])
-        self.history_bits = np.concatenate([self.history_bits[keep], hits[new].astype(np.uint64)])
+        keep = [t for t, m in enumerate(missed) if m <= limit]
+        self._ids = [ids[t] for t in keep]
+        self._boxes = [tracks_boxes[t] for t in keep]
+        self._velocities = [velocities[t] for t in keep]
+        self._missed = [missed[t] for t in keep]
+        self._sightings = [sightings[t] for t in keep]
+        self._bits = [bits[t] for t in keep]
+        for di in new:
+            ids_out[di] = self._next_id
+            self._ids.append(self._next_id)
+            self._next_id += 1
+            self._boxes.append(list(boxes_px[di]))
+            self._velocities.append([0.0, 0.0])
+            self._missed.append(0)
+            self._sightings.append(1)
+            self._bits.append(int(bool(is_target[di])))
         return ids_out

@@ -1,10 +1,18 @@
 """The paper's detector end to end: one grayscale frame in, classified moving objects out.
 
     segment (CLAHE, MOG2, morphology, contours)
-    -> features of every inner region (eqs. 1-11, one vectorised call)
+    -> features of every inner region (eqs. 1-11, one undistortion call)
     -> division of regions merged with their light spot (section 5.2)
-    -> one classifier call for all kept regions (section 5.4)
+    -> one classifier evaluation for all kept regions (section 5.4)
     -> track ids across frames (section 8.2)
+
+OpenCV's work is the floor of the frame's cost; everything above it is kept
+small. A frame holds a handful of regions, for which numpy's per-call cost
+exceeds the arithmetic, so the per-region steps run on plain Python rows (the
+camera's constants and the classifier's polynomial prepared once per
+detector); frames with many regions take the vectorised paths. Both give the
+same detections (``tests/detector/test_detector.py`` checks this against the
+straightforward array computation).
 
 Regions touching the frame border are not classified (their shape is cut);
 neither are regions with no ground point (bottom at or above the horizon) or
@@ -15,20 +23,25 @@ distances, m (see ``detector.camera``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import sklearn
-from sklearn.linear_model import LogisticRegression
-from sklearn.preprocessing import PolynomialFeatures, StandardScaler
 
 from detector.camera import CameraModel
-from detector.classifier import DimensionalClassifier, default_model
+from detector.classifier import (
+    DimensionalClassifier,
+    camera_rows_proba,
+    default_model,
+    numpy_predict_proba,
+)
 from detector.confirm import Tracker
-from detector.divide import DivisionParams, divide_regions
-from detector.features import region_features
+from detector.divide import DivisionParams, divide_rows
+from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
 from detector.segment import Regions, Segmenter, SegmenterParams
+
+__all__ = ["Detection", "Detector", "numpy_predict_proba"]
 
 # frozen, so one shared default instance is safe
 _DEFAULT_SEGMENTER_PARAMS = SegmenterParams()
@@ -83,15 +96,20 @@ class Detector:
                 f"Detector model must be fitted with a 'noise' class, got classes {classes.tolist()}"
             )
         self._classes = classes
+        self._class_names = [str(c) for c in classes]
         self._noise_col = int(np.flatnonzero(classes == "noise")[0])
         self._predict_proba = numpy_predict_proba(self.model, camera) or self._sklearn_predict_proba
+        # the few regions of a usual frame: plain Python (None if the model is another kind)
+        self._proba_rows = camera_rows_proba(self.model, camera)
         self.max_distance_m = float(max_distance_m)
         self.target_threshold = float(target_threshold)
         self.division = division
         self.segmenter = Segmenter(params)
         self.tracker = Tracker() if tracker is None else tracker
         self.last_regions: Regions = Regions.empty(camera.height_px, camera.width_px)
-        self._no_boxes = np.zeros((0, 4))
+        # per-camera constants, computed once rather than every frame
+        self._frame_shape = (camera.height_px, camera.width_px)
+        self._geometry = RegionGeometry(camera)
 
     def reset_background(self) -> None:
         """Rebuild the background model (call when the lamp in view switches)."""
@@ -108,125 +126,63 @@ class Detector:
 
     def process(self, gray: np.ndarray) -> list[Detection]:
         """Detect and classify the moving objects of one uint8 (H, W) frame."""
-        expected = (self.camera.height_px, self.camera.width_px)
-        if not isinstance(gray, np.ndarray) or gray.shape != expected or gray.dtype != np.uint8:
+        if (
+            not isinstance(gray, np.ndarray)
+            or gray.shape != self._frame_shape
+            or gray.dtype != np.uint8
+        ):
             got = (
                 f"{gray.dtype} {gray.shape}"
                 if isinstance(gray, np.ndarray)
                 else type(gray).__name__
             )
             raise ValueError(
-                f"Detector.process needs a grayscale uint8 frame of shape {expected} (the camera's "
-                f"height_px x width_px), got {got}"
+                f"Detector.process needs a grayscale uint8 frame of shape {self._frame_shape} (the "
+                f"camera's height_px x width_px), got {got}"
             )
         regions = self.segmenter.apply(gray)
         self.last_regions = regions
-        inner = np.flatnonzero(~regions.touches_border)
-        if len(inner) == 0:
-            self.tracker.update(self._no_boxes)
+        # a frame holds a handful of regions: per-region work is plain Python on lists
+        # (numpy's per-call cost would exceed the arithmetic), arrays only where results go out
+        inner = [i for i, edge in enumerate(regions.touches_border.tolist()) if not edge]
+        if not inner:
+            self.tracker.update_rows([], [])
             return []
-        boxes, areas = regions.boxes_px[inner], regions.areas_px[inner]
-        feats, valid = region_features(self.camera, boxes, areas)
-        parts = divide_regions(
-            self.camera,
-            [regions.contours[i] for i in inner],
-            boxes,
-            areas,
-            feats,
-            valid,
-            self.division,
+        all_boxes, all_areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
+        boxes = [all_boxes[i] for i in inner]
+        areas = [all_areas[i] for i in inner]
+        rows = self._geometry.rows(boxes, areas)
+        divide_rows(
+            self._geometry, [regions.contours[i] for i in inner], boxes, areas, rows, self.division
         )
-        # NaN distances (no ground point) compare False
-        keep = np.flatnonzero(parts.valid & (parts.features[:, 3] <= self.max_distance_m))
-        if len(keep) == 0:
-            self.tracker.update(self._no_boxes)
+        max_distance_m = self.max_distance_m
+        keep = [j for j, row in enumerate(rows) if row is not None and row[3] <= max_distance_m]
+        if not keep:
+            self.tracker.update_rows([], [])
             return []
-        feats = parts.features[keep]
-        boxes = parts.boxes_px[keep]
-        proba = self._predict_proba(feats)
-        p_target = 1.0 - proba[:, self._noise_col]
-        labels = self._classes[np.argmax(proba, axis=1)]
-        ids = self.tracker.update(boxes, p_target >= self.target_threshold)
+        feats = np.array([rows[j] for j in keep])
+        boxes = [boxes[j] for j in keep]
+        if self._proba_rows is not None and len(keep) <= SCALAR_MAX_REGIONS:
+            proba_rows = self._proba_rows([rows[j] for j in keep])
+            proba = np.array(proba_rows)
+            noise = self._noise_col
+            p_target = [1.0 - p[noise] for p in proba_rows]
+            labels = [p.index(max(p)) for p in proba_rows]  # the first maximum, as argmax
+        else:
+            proba = self._predict_proba(feats)
+            p_target = (1.0 - proba[:, self._noise_col]).tolist()
+            labels = proba.argmax(axis=1).tolist()
+        threshold = self.target_threshold
+        ids = self.tracker.update_rows(boxes, [p >= threshold for p in p_target])
+        names = self._class_names
         return [
             Detection(
-                box_px=(int(b[0]), int(b[1]), int(b[2]), int(b[3])),
+                box_px=tuple(box),
                 features=feats[j],
-                cls=str(labels[j]),
+                cls=names[labels[j]],
                 probabilities=proba[j],
-                p_target=float(p_target[j]),
-                track_id=int(ids[j]),
+                p_target=p_target[j],
+                track_id=ids[j],
             )
-            for j, b in enumerate(boxes.tolist())
+            for j, box in enumerate(boxes)
         ]
-
-
-def numpy_predict_proba(
-    model: DimensionalClassifier, camera: CameraModel
-) -> Callable[[np.ndarray], np.ndarray] | None:
-    """``model.predict_proba`` as plain numpy, or None when the model is not the known pipeline.
-
-    Why: scikit-learn validates its input at every pipeline step, about 0.4 ms
-    per call, a fifth of OpenCV's whole work on a 320 x 240 frame; the
-    arithmetic of StandardScaler -> PolynomialFeatures -> LogisticRegression is
-    a few tens of microseconds. The numpy version is used only if it agrees
-    with ``model.predict_proba`` (to 1e-9) on probe rows spanning the
-    feature ranges at this camera's tilt and height; otherwise the detector
-    calls ``predict_proba`` itself.
-    """
-    pipe = getattr(model, "pipeline_", None)
-    steps = [step for _, step in getattr(pipe, "steps", ())]
-    if len(steps) != 3:
-        return None
-    scaler, poly, logreg = steps
-    if not (
-        type(scaler) is StandardScaler
-        and type(poly) is PolynomialFeatures
-        and type(logreg) is LogisticRegression
-    ):
-        return None
-    mean = scaler.mean_ if scaler.with_mean else 0.0
-    scale = scaler.scale_ if scaler.with_std else 1.0
-    powers = np.asarray(poly.powers_)  # (n_out, n_in) exponents
-    if powers.sum(axis=1).max() > 2:
-        return None
-    # each output term is z_i * z_j, with index n_in standing for the constant 1
-    n_in = powers.shape[1]
-    first = np.empty(len(powers), np.intp)
-    second = np.empty(len(powers), np.intp)
-    for row, exps in enumerate(powers):
-        factors = np.repeat(np.arange(n_in), exps).tolist() + [n_in, n_in]
-        first[row], second[row] = factors[0], factors[1]
-    weights, bias = logreg.coef_.T, logreg.intercept_
-    columns = np.asarray(pipe.classes_)
-    n_classes = len(model.classes_)
-
-    def proba(features: np.ndarray) -> np.ndarray:
-        z = np.ones((len(features), n_in + 1))
-        z[:, :n_in] = (features - mean) / scale
-        logits = (z[:, first] * z[:, second]) @ weights + bias
-        if logits.shape[1] == 1:  # two classes: one logistic output
-            p1 = 1.0 / (1.0 + np.exp(-logits[:, 0]))
-            p = np.column_stack([1.0 - p1, p1])
-        else:
-            e = np.exp(logits - logits.max(axis=1, keepdims=True))
-            p = e / e.sum(axis=1, keepdims=True)
-        out = np.zeros((len(features), n_classes))
-        out[:, columns] = p
-        return out
-
-    rng = np.random.default_rng(0)
-    probe = np.column_stack(
-        [
-            rng.uniform(0.05, 6.0, 256),
-            rng.uniform(0.05, 3.0, 256),
-            rng.uniform(0.01, 12.0, 256),
-            rng.uniform(1.0, 40.0, 256),
-            np.full(256, camera.tilt_deg),
-            np.full(256, camera.height_m),
-        ]
-    )
-    try:
-        agrees = np.allclose(proba(probe), model.predict_proba(probe), rtol=0.0, atol=1e-9)
-    except (ValueError, IndexError, AttributeError):
-        return None
-    return proba if agrees else None

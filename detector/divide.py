@@ -39,14 +39,15 @@ bicycle under its rider looks to the histograms like a spot under a walker.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from detector.camera import CameraModel
-from detector.features import region_features
-from detector.segment import contour_boxes_and_areas
+from detector.features import RegionGeometry
 
 # Table 1: the largest silhouette of any target class is a vehicle seen from
 # the side, 4.6 m long x 2 m high; a region estimated larger is more than one thing.
@@ -122,6 +123,12 @@ class Division:
     spot_boxes_px: np.ndarray  # (S, 4) int32
 
 
+def _count(occ: np.ndarray, axis: int) -> list[int]:
+    """Set pixels per column (axis 0) or row (axis 1) of a boolean mask, as a list."""
+    # add.reduce in int32: half the cost of count_nonzero's axis path on these small masks
+    return np.add.reduce(occ, axis=axis, dtype=np.int32).tolist()
+
+
 def split_object_and_spot(
     roi: np.ndarray, params: DivisionParams = DivisionParams()
 ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -133,27 +140,33 @@ def split_object_and_spot(
     h, w = occ.shape
     if h < 6 or w < 6:
         return None
-    col_h = np.count_nonzero(occ, axis=0)
-    tall = np.flatnonzero(col_h >= params.tall_fraction * col_h.max())
-    c0, c1 = int(tall[0]), int(tall[-1])
-    n_side = int(col_h[:c0].sum() + col_h[c1 + 1 :].sum())
-    if n_side < params.min_side_fraction * int(col_h.sum()):
+    # most candidates fail one of the first two tests: plain Python on the histograms up to there
+    col_h = _count(occ, axis=0)
+    tallest = max(col_h)
+    if tallest == 0:
         return None
-    side = occ.copy()
-    side[:, c0 : c1 + 1] = False
+    tall = [j for j, n in enumerate(col_h) if n >= params.tall_fraction * tallest]
+    c0, c1 = tall[0], tall[-1]
+    n_side = sum(col_h[:c0]) + sum(col_h[c1 + 1 :])
+    if n_side < params.min_side_fraction * sum(col_h):
+        return None
 
-    body_rows = np.flatnonzero(occ[:, c0 : c1 + 1].any(axis=1))
-    b_top, b_bottom = int(body_rows[0]), int(body_rows[-1])
+    tall_w = _count(occ[:, c0 : c1 + 1], axis=1)
+    body_rows = [r for r, n in enumerate(tall_w) if n]
+    b_top, b_bottom = body_rows[0], body_rows[-1]
     # slivers of the body's own outline (a shoulder, a sleeve) fall outside the
     # tall columns too; the spot's rows are those where the side part is wide
-    left_w = np.count_nonzero(side[:, :c0], axis=1)
-    right_w = np.count_nonzero(side[:, c1 + 1 :], axis=1)
-    side_w = left_w + right_w
-    side_rows = np.flatnonzero(side_w >= params.spot_row_fraction * side_w.max())
-    s_top, s_bottom = int(side_rows[0]), int(side_rows[-1])
+    left_w = _count(occ[:, :c0], axis=1)
+    right_w = _count(occ[:, c1 + 1 :], axis=1)
+    side_w = [left + right for left, right in zip(left_w, right_w, strict=True)]
+    widest = max(side_w)
+    side_rows = [r for r, n in enumerate(side_w) if n >= params.spot_row_fraction * widest]
+    s_top, s_bottom = side_rows[0], side_rows[-1]
     side_h = s_bottom - s_top + 1
     if side_h > params.max_side_height_fraction * (b_bottom - b_top + 1):
         return None
+    side = occ.copy()
+    side[:, c0 : c1 + 1] = False
 
     band_end = s_bottom + 1
     if s_bottom < b_bottom - max(2, side_h // 4):
@@ -162,7 +175,7 @@ def split_object_and_spot(
         if s_bottom < (b_top + b_bottom) / 2:
             return None
         foot = b_bottom
-    elif min(left_w.max(), right_w.max()) >= params.spot_row_fraction * side_w.max():
+    elif min(max(left_w), max(right_w)) >= params.spot_row_fraction * widest:
         # spot in front of the object: the body ends at the last narrow row above the spot
         band_end = h
         row_w = np.count_nonzero(occ[b_top : s_top + 1], axis=1)
@@ -172,7 +185,8 @@ def split_object_and_spot(
     else:
         # spot beside the object, about as far away: feet at the spot's widest row
         band_end = h
-        foot = s_top + int(np.argmax(side_w[s_top : s_bottom + 1]))
+        rows = side_w[s_top : s_bottom + 1]
+        foot = s_top + rows.index(max(rows))
     if foot <= b_top + 2:
         return None
 
@@ -192,17 +206,76 @@ def split_object_and_spot(
     return body, spot
 
 
-def _part_box_and_area(part: np.ndarray, x0: int, y0: int) -> tuple[np.ndarray, float] | None:
-    """Frame box (x, y, w, h) and Green's-theorem area of a part mask cut from a box at (x0, y0)."""
+def _part_box_and_area(part: np.ndarray, x0: int, y0: int) -> tuple[list[int], float] | None:
+    """Frame box [x, y, w, h] and Green's-theorem area of a part mask cut from a box at (x0, y0)."""
     contours, _ = cv2.findContours(part.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     if not contours:
         return None
-    boxes, areas = contour_boxes_and_areas(contours)
-    lo = boxes[:, :2].min(axis=0)
-    hi = (boxes[:, :2] + boxes[:, 2:]).max(axis=0)
-    return np.array([x0 + lo[0], y0 + lo[1], hi[0] - lo[0], hi[1] - lo[1]], np.int32), float(
-        areas.sum()
-    )
+    rects = [cv2.boundingRect(c) for c in contours]
+    left = min(r[0] for r in rects)
+    top = min(r[1] for r in rects)
+    right = max(r[0] + r[2] for r in rects)
+    bottom = max(r[1] + r[3] for r in rects)
+    area = sum(cv2.contourArea(c) for c in contours)
+    return [x0 + left, y0 + top, right - left, bottom - top], float(area)
+
+
+def _ratio(num: float, den: float) -> float:
+    """num / den with numpy's float semantics at den == 0 (inf, or NaN for 0 / 0)."""
+    if den:
+        return num / den
+    return math.copysign(math.inf, num) if num else math.nan
+
+
+def divide_rows(
+    geometry: RegionGeometry,
+    contours: Sequence[np.ndarray],
+    boxes_px: list[list[int]],
+    areas_px: list[float],
+    rows: list[list[float] | None],
+    params: DivisionParams = DivisionParams(),
+) -> tuple[list[int], list[list[int]]]:
+    """``divide_regions`` on plain Python rows, replacing divided regions' entries in place.
+
+    ``boxes_px`` are [x, y, w, h] lists, ``rows`` the ``RegionGeometry.rows``
+    feature rows (None: no ground point). Returns (indices of the divided
+    regions, the spot boxes cut off). The detector's per-frame entry point:
+    a frame's few regions cost no array round trip.
+    """
+    divided: list[int] = []
+    spots: list[list[int]] = []
+    for i, (box, area, row) in enumerate(zip(boxes_px, areas_px, rows, strict=True)):
+        x, y, w, h = box
+        # histograms of a region under min_height_px rows cannot resolve an object above a spot
+        if row is None or h < params.min_height_px:
+            continue
+        extent = area / max(w * h, 1)
+        # NaN areas compare False
+        if not (extent < params.max_extent or row[2] > params.max_area_m2):
+            continue
+        roi = np.zeros((h, w), np.uint8)
+        cv2.drawContours(roi, contours, i, 1, thickness=cv2.FILLED, offset=(-x, -y))
+        parts = split_object_and_spot(roi.view(bool), params)
+        if parts is None:
+            continue
+        body = _part_box_and_area(parts[0], x, y)
+        spot = _part_box_and_area(parts[1], x, y)
+        if body is None or spot is None:
+            continue
+        body_row, spot_row = geometry.rows([body[0], spot[0]], [body[1], spot[1]])
+        if body_row is None or spot_row is None:
+            continue
+        body_extent = body[1] / max(body[0][2] * body[0][3], 1)
+        if (
+            spot_row[1] > params.max_spot_height_to_width * spot_row[0]
+            or body_extent <= extent
+            or _ratio(body_row[1], body_row[0]) <= _ratio(row[1], row[0])
+        ):
+            continue
+        boxes_px[i], areas_px[i], rows[i] = body[0], body[1], body_row
+        divided.append(i)
+        spots.append(spot[0])
+    return divided, spots
 
 
 def divide_regions(
@@ -222,51 +295,23 @@ def divide_regions(
     """
     boxes = np.asarray(boxes_px, np.int32).reshape(-1, 4)
     areas = np.asarray(areas_px, np.float64).reshape(-1)
-    n = len(boxes)
-    extent = areas / np.maximum(boxes[:, 2] * boxes[:, 3], 1)
-    # NaN features (invalid rows) compare False without a warning
-    candidate = valid & ((extent < params.max_extent) | (features[:, 2] > params.max_area_m2))
-    # histograms of a region under min_height_px rows cannot resolve an object above a spot
-    candidate &= boxes[:, 3] >= params.min_height_px
-    divided = np.zeros(n, bool)
-    if not candidate.any():
-        return Division(boxes, areas, features, valid, divided, np.zeros((0, 4), np.int32))
-    out_boxes, out_areas, out_feats = boxes.copy(), areas.copy(), features.copy()
-    spots: list[np.ndarray] = []
-    for i in np.flatnonzero(candidate):
-        x, y, w, h = (int(v) for v in boxes[i])
-        roi = np.zeros((h, w), np.uint8)
-        cv2.drawContours(roi, contours, int(i), 1, thickness=cv2.FILLED, offset=(-x, -y))
-        parts = split_object_and_spot(roi.view(bool), params)
-        if parts is None:
-            continue
-        body = _part_box_and_area(parts[0], x, y)
-        spot = _part_box_and_area(parts[1], x, y)
-        if body is None or spot is None:
-            continue
-        part_feats, part_valid = region_features(
-            camera, np.stack([body[0], spot[0]]), np.array([body[1], spot[1]])
-        )
-        if not part_valid.all():
-            continue
-        spot_w_m, spot_h_m = part_feats[1, 0], part_feats[1, 1]
-        body_extent = body[1] / max(int(body[0][2]) * int(body[0][3]), 1)
-        ratio_whole = features[i, 1] / features[i, 0]
-        ratio_body = part_feats[0, 1] / part_feats[0, 0]
-        if (
-            spot_h_m > params.max_spot_height_to_width * spot_w_m
-            or body_extent <= extent[i]
-            or ratio_body <= ratio_whole
-        ):
-            continue
-        out_boxes[i], out_areas[i], out_feats[i] = body[0], body[1], part_feats[0]
-        divided[i] = True
-        spots.append(spot[0])
+    feats = np.asarray(features, np.float64).reshape(-1, features.shape[-1])
+    valid = np.asarray(valid, bool).reshape(-1)
+    box_rows, area_rows = boxes.tolist(), areas.tolist()
+    rows = [row if ok else None for row, ok in zip(feats.tolist(), valid.tolist(), strict=True)]
+    divided, spots = divide_rows(
+        RegionGeometry(camera), contours, box_rows, area_rows, rows, params
+    )
+    out_boxes, out_areas, out_feats = boxes.copy(), areas.copy(), feats.copy()
+    for i in divided:
+        out_boxes[i], out_areas[i], out_feats[i] = box_rows[i], area_rows[i], rows[i]
+    flags = np.zeros(len(boxes), bool)
+    flags[divided] = True
     return Division(
         boxes_px=out_boxes,
         areas_px=out_areas,
         features=out_feats,
         valid=valid,
-        divided=divided,
+        divided=flags,
         spot_boxes_px=np.array(spots, np.int32).reshape(-1, 4),
     )

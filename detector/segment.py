@@ -187,27 +187,39 @@ class Segmenter:
         if p.dilate_iterations > 0:
             cv2.dilate(fg, self._kernel, dst=fg, iterations=p.dilate_iterations)
         contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        if not contours:
-            return Regions(
-                np.zeros((0, 4), np.int32),
-                np.zeros(0),
-                [],
-                np.zeros(0, bool),
-                foreground_fraction,
-                fg,
-            )
-
-        idx, boxes, areas = _large_enough(contours, p.min_area_fraction * frame_px)
-        dense = areas >= p.min_extent * (boxes[:, 2].astype(np.float64) * boxes[:, 3])
-        idx, boxes, areas = idx[dense], boxes[dense], areas[dense]
         height_px, width_px = gray.shape
-        touches = np.any(
-            (boxes[:, :2] <= 0) | (boxes[:, :2] + boxes[:, 2:] >= (width_px, height_px)), axis=1
-        )
+        min_area_px = p.min_area_fraction * frame_px
+        if len(contours) > _FEW_CONTOURS:
+            idx, boxes, areas = _large_enough(contours, min_area_px)
+            dense = areas >= p.min_extent * (boxes[:, 2].astype(np.float64) * boxes[:, 3])
+            idx, boxes, areas = idx[dense], boxes[dense], areas[dense]
+            touches = np.any(
+                (boxes[:, :2] <= 0) | (boxes[:, :2] + boxes[:, 2:] >= (width_px, height_px)),
+                axis=1,
+            )
+            kept = [contours[i] for i in idx]
+        else:
+            # few contours: plain Python over OpenCV's per-contour calls, areas first and
+            # boxes only for the survivors (most are specks); numpy only for the results
+            kept, box_rows, area_rows, touch_rows = [], [], [], []
+            for contour in contours:
+                area = cv2.contourArea(contour)
+                if area < min_area_px:
+                    continue
+                x, y, w, h = cv2.boundingRect(contour)
+                if area < p.min_extent * (w * h):
+                    continue
+                kept.append(contour)
+                box_rows.append((x, y, w, h))
+                area_rows.append(area)
+                touch_rows.append(x <= 0 or y <= 0 or x + w >= width_px or y + h >= height_px)
+            boxes = np.array(box_rows, np.int32).reshape(-1, 4)
+            areas = np.array(area_rows, np.float64)
+            touches = np.array(touch_rows, bool)
         return Regions(
             boxes_px=boxes,
             areas_px=areas,
-            contours=[contours[i] for i in idx],
+            contours=kept,
             touches_border=touches,
             foreground_fraction=foreground_fraction,
             mask=fg,
@@ -215,16 +227,10 @@ class Segmenter:
 
 
 def _large_enough(contours, min_area_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Indices, boxes and areas of the contours with Green's-theorem area >= min_area_px."""
-    if len(contours) > _FEW_CONTOURS:
-        boxes, areas = contour_boxes_and_areas(contours)
-        idx = np.flatnonzero(areas >= min_area_px)
-        return idx, boxes[idx], areas[idx]
-    # few contours: areas first, boxes only for the survivors (most are specks)
-    all_areas = [cv2.contourArea(c) for c in contours]
-    keep = [i for i, a in enumerate(all_areas) if a >= min_area_px]
-    boxes = np.array([cv2.boundingRect(contours[i]) for i in keep], np.int32).reshape(-1, 4)
-    return np.array(keep, np.intp), boxes, np.array([all_areas[i] for i in keep], np.float64)
+    """Indices, boxes and areas of the (many) contours with Green's-theorem area >= min_area_px."""
+    boxes, areas = contour_boxes_and_areas(contours)
+    idx = np.flatnonzero(areas >= min_area_px)
+    return idx, boxes[idx], areas[idx]
 
 
 def contour_boxes_and_areas(

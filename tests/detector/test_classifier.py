@@ -144,3 +144,36 @@ _SKLEARN_CHECKS = [
 )
 def test_sklearn_estimator_checks(estimator, check) -> None:
     check(estimator)
+
+
+def test_camera_rows_proba_equals_predict_proba(small_model, held_out) -> None:
+    from detector.camera import CameraModel
+    from detector.classifier import camera_rows_proba
+
+    cam = CameraModel(
+        height_m=4.5,
+        tilt_deg=17.0,
+        focal_mm=3.67,
+        sensor_w_mm=4.8,
+        sensor_h_mm=3.6,
+        width_px=424,
+        height_px=240,
+    )
+    for model in (default_model(), small_model):
+        rows_proba = camera_rows_proba(model, cam)
+        assert rows_proba is not None
+        X = held_out.X.copy()
+        X[:, 4], X[:, 5] = cam.tilt_deg, cam.height_m  # one camera's rows
+        got = np.array(rows_proba(X.tolist()))
+        np.testing.assert_allclose(got, model.predict_proba(X), rtol=0, atol=1e-9)
+    # a model missing classes keeps zero columns for them
+    keep = np.isin(held_out.y, ["noise", "vehicle"])
+    two = DimensionalClassifier().fit(held_out.X[keep], held_out.y[keep])
+    got = np.array(camera_rows_proba(two, cam)(X[:30].tolist()))
+    np.testing.assert_allclose(got, two.predict_proba(X[:30]), rtol=0, atol=1e-9)
+    assert np.all(got[:, [1, 2, 3]] == 0.0)
+    # anything but the known pipeline: no fast path
+    from sklearn.linear_model import LogisticRegression
+
+    other = LogisticRegression(max_iter=5000).fit(held_out.X[::20], held_out.y[::20])
+    assert camera_rows_proba(other, cam) is None

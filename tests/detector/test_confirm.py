@@ -149,3 +149,34 @@ def test_tracker_validates_inputs():
         Tracker(max_missed_frames=-1)
     with pytest.raises(ValueError, match="k must be <= n"):
         Tracker(confirm_k=4, confirm_n=3)
+
+
+def test_plain_python_and_vectorised_pair_scores_agree():
+    # boxes scattered around the predictions: near, touching, overlapping and far pairs
+    rng = np.random.default_rng(11)
+    tracker = Tracker(min_iou=0.1, max_distance_diag=1.0)
+    for _ in range(50):
+        pred = np.column_stack([rng.uniform(0, 100, (6, 2)), rng.uniform(2, 30, (6, 2))]).tolist()
+        boxes = np.column_stack([rng.uniform(0, 100, (7, 2)), rng.uniform(2, 30, (7, 2))]).tolist()
+        plain = tracker._scores(pred, boxes)
+        vectorised = tracker._scores_vectorised(pred, boxes)
+        assert [(t, d) for _, t, d in plain] == [(t, d) for _, t, d in vectorised]
+        np.testing.assert_allclose([s for s, *_ in plain], [s for s, *_ in vectorised], rtol=1e-12)
+        assert 0 < len(plain) < 42  # some pairs allowed, some not
+
+
+def test_plain_python_and_vectorised_tracking_give_the_same_ids():
+    rng = np.random.default_rng(5)
+    plain, vectorised = Tracker(), Tracker()
+    plain.SCALAR_MAX_PAIRS, vectorised.SCALAR_MAX_PAIRS = 10**9, 0
+    starts = rng.uniform(0, 300, (8, 2))
+    speeds = rng.uniform(-6, 6, (8, 2))
+    for f in range(120):
+        visible = rng.random(8) < 0.8
+        centres = starts[visible] + speeds[visible] * f + rng.normal(0, 2, (visible.sum(), 2))
+        boxes = np.column_stack([centres, np.full((visible.sum(), 2), 20.0)])
+        hits = rng.random(len(boxes)) < 0.5
+        np.testing.assert_array_equal(plain.update(boxes, hits), vectorised.update(boxes, hits))
+    np.testing.assert_array_equal(plain.ids, vectorised.ids)
+    np.testing.assert_allclose(plain.velocities_px, vectorised.velocities_px)
+    assert plain.confirmed_ids() == vectorised.confirmed_ids()

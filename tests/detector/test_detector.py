@@ -9,9 +9,13 @@ import pytest
 from sklearn.linear_model import LogisticRegression
 
 from detector.camera import CameraModel
-from detector.classifier import CLASSES, default_model
-from detector.detector import Detection, Detector, numpy_predict_proba
-from detector.shapes import pedestrian_shape, silhouette_mask
+from detector.classifier import CLASSES, default_model, numpy_predict_proba
+from detector.confirm import Tracker
+from detector.detector import Detection, Detector
+from detector.divide import divide_regions
+from detector.features import SCALAR_MAX_REGIONS, region_features
+from detector.segment import Segmenter
+from detector.shapes import cyclist_shape, ground_spot_shape, pedestrian_shape, silhouette_mask
 
 H_PX, W_PX = 240, 320
 FPS = 15.0
@@ -216,3 +220,65 @@ def test_is_target_uses_the_threshold(model):
     assert not det.is_target([])
     assert not det.is_target([make(0.69)])
     assert det.is_target([make(0.69), make(0.7)])
+
+
+# ------------------------------------------------- optimised path = reference
+def reference_process(camera, model, segmenter, tracker, frame, max_distance_m=25.0):
+    """The detector's steps done the straightforward way: whole arrays, scikit-learn's predict_proba."""
+    regions = segmenter.apply(frame)
+    inner = np.flatnonzero(~regions.touches_border)
+    boxes, areas = regions.boxes_px[inner], regions.areas_px[inner]
+    feats, valid = region_features(camera, boxes, areas)
+    parts = divide_regions(camera, [regions.contours[i] for i in inner], boxes, areas, feats, valid)
+    keep = parts.valid & (parts.features[:, 3] <= max_distance_m)
+    feats, boxes = parts.features[keep], parts.boxes_px[keep]
+    proba = model.predict_proba(feats) if len(feats) else np.zeros((0, len(CLASSES)))
+    p_target = 1.0 - proba[:, CLASSES.index("noise")]
+    ids = tracker.update(boxes, p_target >= 0.5)
+    labels = np.asarray(model.classes_)[proba.argmax(axis=1)]
+    detections = [
+        (tuple(int(v) for v in box), f, str(c), p, i)
+        for box, f, c, p, i in zip(boxes, feats, labels, proba, ids, strict=True)
+    ]
+    return detections, int(np.count_nonzero(parts.divided))
+
+
+def test_optimised_detector_equals_the_straightforward_computation(model):
+    # a distorted lens (undistortion path), walkers, a cyclist with a headlight spot in front
+    # (division) and bursts of many specks (past the plain-Python sizes: the vectorised paths)
+    cam = scene_b(k1=-0.08, k2=0.01)
+    clip = Clip(cam, seed=7)
+    rng = np.random.default_rng(7)
+    det = Detector(cam, model=model)
+    reference_tracker = Tracker()
+    reference_tracker.SCALAR_MAX_PAIRS = 0  # score every pair matrix with numpy
+    reference_segmenter = Segmenter()
+    n_regions, n_divided, compared = [], 0, 0
+    for k in range(100):
+        t_s = k / FPS
+        shapes = []
+        if k >= 40:
+            shapes = [
+                walker(9.0, -2.5, t_s - 40 / FPS),
+                walker(14.0, 2.0, t_s - 40 / FPS, heading_rad=-math.pi / 2),
+                cyclist_shape(6.0 + 4.0 * (t_s - 40 / FPS), 0.5, 0.0, 0.6, 1.7, 1.8, 3.0 * t_s),
+                ground_spot_shape(8.5 + 4.0 * (t_s - 40 / FPS), 0.5, 0.0, 1.6, 1.2),
+            ]
+        img = clip.frame(shapes)
+        if k >= 40 and k % 4 == 0:
+            for x, y in rng.uniform((20, 100), (300, 225), (24, 2)).astype(int):
+                img[y : y + 11, x : x + 11] = 220
+        got = det.process(img)
+        want, divided = reference_process(cam, model, reference_segmenter, reference_tracker, img)
+        n_regions.append(len(det.last_regions))
+        assert len(got) == len(want), k
+        for d, (box, feats, cls, proba, track_id) in zip(got, want, strict=True):
+            assert d.box_px == box and d.cls == cls and d.track_id == track_id, k
+            np.testing.assert_allclose(d.features, feats, rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(d.probabilities, proba, rtol=0, atol=1e-9)
+            assert d.p_target == pytest.approx(1.0 - proba[CLASSES.index("noise")], abs=1e-9)
+            compared += 1
+        n_divided += divided
+    # the clip did exercise both sizes of frame, and the division
+    print(f"regions per frame up to {max(n_regions)}, {compared} detections, {n_divided} divided")
+    assert max(n_regions) > SCALAR_MAX_REGIONS and compared > 100 and n_divided > 0

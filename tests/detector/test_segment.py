@@ -331,3 +331,29 @@ def test_division_params_are_validated():
         DivisionParams(max_extent=0.0)
     with pytest.raises(ValueError, match="wide_row_factor"):
         DivisionParams(wide_row_factor=1.0)
+
+
+def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
+    import detector.segment as segment
+
+    def run() -> list[Regions]:
+        scene = Scene(9)
+        seg = warmed_up(scene)
+        out = []
+        for i in range(6):
+            rects = [(20 + 40 * k + 2 * i, 40 + 30 * (k % 5), 8 + k, 12 + 2 * k) for k in range(7)]
+            img = scene.frame([*rects, (-10, 190 + 2 * i, 30, 40)])  # the last touches the border
+            cv2.line(img, (200 + 3 * i, 30), (260 + 3 * i, 110), 200, 3)  # sparse: dropped
+            out.append(seg.apply(img))
+        return out
+
+    few = run()
+    monkeypatch.setattr(segment, "_FEW_CONTOURS", 0)  # every frame through the vectorised path
+    many = run()
+    assert sum(len(r) for r in few) >= 6 * 6
+    for a, b in zip(few, many, strict=True):
+        np.testing.assert_array_equal(a.boxes_px, b.boxes_px)
+        np.testing.assert_allclose(a.areas_px, b.areas_px, rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(a.touches_border, b.touches_border)
+        assert a.boxes_px.dtype == b.boxes_px.dtype == np.int32 and a.touches_border.any()
+        assert [len(c) for c in a.contours] == [len(c) for c in b.contours]
