@@ -132,3 +132,23 @@ def test_silhouette_lands_where_the_camera_projects_it() -> None:
     assert silhouette_mask(SCENE_B, pedestrian_shape(-5.0, 0.0, 1.0, 0.5, 1.75, 0.6, 0.8)) is None
     edge = silhouette_mask(SCENE_B, vehicle_shape(5.0, 4.0, 0.0, 1.7, 1.5, 4.2))
     assert edge is not None and edge.touches_border
+
+
+def test_parts_and_silhouettes_stay_importable_from_shapes() -> None:
+    import detector.shape_parts as shape_parts
+    import detector.shapes as shapes
+    import detector.silhouette as silhouette
+
+    for name in ("Shape", "IR_REFLECTANCE", "VERTICES_PER_PART", "Parts"):
+        assert getattr(shapes, name) is getattr(shape_parts, name)
+    for name in (
+        "Silhouette",
+        "SUBPIXEL_BITS",
+        "project_parts",
+        "rasterise_parts",
+        "silhouette_mask",
+    ):
+        assert getattr(shapes, name) is getattr(silhouette, name)
+    walker = shapes.pedestrian_shape(10.0, 0.0, 0.0, 0.5, 1.75, 0.7, 1.0)
+    assert isinstance(walker, shapes.Shape) and walker.n_parts == 6
+    assert walker.corners_m.shape[1] == shapes.VERTICES_PER_PART

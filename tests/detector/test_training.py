@@ -138,3 +138,16 @@ def test_unseeable_kind_fails_instead_of_looping() -> None:
 def test_every_noise_kind_is_registered() -> None:
     assert set(TrainingConfig().noise_weights) <= set(NOISE_SAMPLERS) | set(FEATURE_NOISE)
     assert not set(NOISE_SAMPLERS) & set(FEATURE_NOISE)
+
+
+def test_region_limits_are_the_segmenters_and_old_names_still_import() -> None:
+    import detector.training as training
+    import detector.training_samplers as samplers
+    from detector.segment import SegmenterParams
+
+    config, segmenter = TrainingConfig(), SegmenterParams()
+    for name in ("open_kernel_px", "dilate_iterations", "min_area_fraction", "min_extent"):
+        assert getattr(config, name) == getattr(segmenter, name), name
+    for name in ("TABLE1", "SizeRange", "TARGET_SAMPLERS", "NOISE_SAMPLERS", "FEATURE_NOISE"):
+        assert getattr(training, name) is getattr(samplers, name)
+    assert set(training.TARGET_SAMPLERS) == set(CLASSES[1:])
