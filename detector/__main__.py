@@ -135,7 +135,16 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if argv and argv[0] == "train":
             args = _train_parser().parse_args(argv[1:])
-            path = train_camera(args.camera, args.out, seed=args.seed)
+            from detector.training import UnseenKindError
+
+            try:
+                path = train_camera(args.camera, args.out, seed=args.seed)
+            except UnseenKindError as exc:
+                raise CameraError(
+                    f"{args.camera}: this camera never sees a whole {exc.kind} in its frame "
+                    f"({exc.seen} of {exc.attempts} tries), so no model can be trained for it; "
+                    "check its height_m, tilt_deg and field of view"
+                ) from None
             print(f"model written to {path}")
             return 0
         args = _detect_parser().parse_args(argv)

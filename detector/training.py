@@ -67,6 +67,7 @@ __all__ = [
     "SizeRange",
     "TrainingConfig",
     "TrainingSet",
+    "UnseenKindError",
     "group_members",
     "make_training_samples",
     "make_training_set",
@@ -76,6 +77,22 @@ __all__ = [
 
 # the segmenter's own defaults, so training regions are cleaned and filtered like the detector's
 _SEGMENTER = SegmenterParams()
+#: A kind seen whole in fewer than 1 of HOPELESS_ODDS tries, after MIN_ATTEMPTS, fails training
+#: (the general set sees every kind in more than 1 of 8).
+HOPELESS_ODDS = 200
+MIN_ATTEMPTS = 2000
+
+
+class UnseenKindError(RuntimeError):
+    """The cameras (almost) never see one kind of object whole, so its samples cannot be drawn."""
+
+    def __init__(self, kind: str, seen: int, attempts: int) -> None:
+        self.kind, self.seen, self.attempts = kind, seen, attempts
+        super().__init__(
+            f"make_training_set: the cameras saw {kind!r} whole in only {seen} of {attempts} "
+            "attempts; check the cameras and the TrainingConfig"
+        )
+
 
 CLASSES = ("noise", "pedestrian", "group", "cyclist", "vehicle")
 
@@ -341,13 +358,12 @@ def make_training_samples(
         todo = [k for k in wanted if len(rows[k]) < wanted[k]]
         if not todo:
             break
-        # a kind the cameras (almost) never see whole fails loudly instead of looping for ever
-        hopeless = [k for k in todo if attempts[k] > 200 * wanted[k] + 2000]
-        if hopeless:
-            raise RuntimeError(
-                f"make_training_set: the cameras saw {hopeless[0]!r} whole in only {len(rows[hopeless[0]])} "
-                f"of {attempts[hopeless[0]]} attempts; check the cameras and the TrainingConfig"
-            )
+        # a kind the cameras (almost) never see whole fails loudly instead of looping for ever:
+        # once MIN_ATTEMPTS tries show it seen in fewer than 1 of HOPELESS_ODDS, it fails at
+        # once; a kind seen more often reaches its quota within HOPELESS_ODDS x quota tries
+        for k in todo:
+            if attempts[k] >= MIN_ATTEMPTS and len(rows[k]) * HOPELESS_ODDS < attempts[k]:
+                raise UnseenKindError(k, len(rows[k]), attempts[k])
         cam = (
             random_camera(rng, config)
             if cameras is None

@@ -151,3 +151,20 @@ def test_region_limits_are_the_segmenters_and_old_names_still_import() -> None:
     for name in ("TABLE1", "SizeRange", "TARGET_SAMPLERS", "NOISE_SAMPLERS", "FEATURE_NOISE"):
         assert getattr(training, name) is getattr(samplers, name)
     assert set(training.TARGET_SAMPLERS) == set(CLASSES[1:])
+
+
+def test_cli_train_names_the_camera_file_that_never_sees_an_object_whole(tmp_path, capsys) -> None:
+    from detector.__main__ import main
+
+    camera_file = tmp_path / "steep.yaml"
+    camera_file.write_text(
+        "height_m: 2.0\ntilt_deg: 80.0\nfocal_mm: 3.67\nsensor_w_mm: 4.8\nsensor_h_mm: 3.6\n"
+        "width_px: 424\nheight_px: 240\n"
+    )
+    out = tmp_path / "models" / "steep.joblib"
+    assert main(["train", "--camera", str(camera_file), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert err.startswith(f"error: {camera_file}: this camera never sees a whole ")
+    assert "(0 of 2000 tries)" in err and "height_m, tilt_deg" in err
+    assert not out.parent.exists()  # nothing half-written
