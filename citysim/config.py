@@ -82,7 +82,7 @@ class SimulationSpec(Spec):
     """How hard the simulator looks: trade exactness for speed, never the traffic."""
 
     idle_frame_stride: int = Field(
-        default=5,
+        default=10,
         ge=1,
         le=30,
         description="an idle lamp camera (nobody in view, steady light, no motion in its last judged "
@@ -234,6 +234,19 @@ class Scenario(Spec):
                 raise FieldPathError(
                     ("traffic", "classes", spec.kind, "crossing_fraction"),
                     "crossing needs a sidewalk on each side of the road; set 0 or add one",
+                )
+        frame_s = 1.0 / lamps.camera_model.fps
+        if lamps.luminaire.hold_s < frame_s:
+            raise FieldPathError(
+                ("lamps", "luminaire", "hold_s"),
+                f"must be at least one camera frame ({frame_s:.3f} s at {lamps.camera_model.fps:g} fps), "
+                f"or the lamp drops between two frames that both see someone; got {lamps.luminaire.hold_s}",
+            )
+        for i, c in enumerate(self.controllers):
+            if c.hold_s is not None and c.hold_s < frame_s:
+                raise FieldPathError(
+                    ("controllers", i, "hold_s"),
+                    f"must be at least one camera frame ({frame_s:.3f} s); got {c.hold_s}",
                 )
         for i, agent in enumerate(self.traffic.scripted):
             paths = street.lanes if agent.cls in ("cyclist", "vehicle") else street.sidewalks
