@@ -296,6 +296,8 @@ class Tracker:
         The detector's per-frame entry point (no array round trip); the caller
         guarantees equal lengths.
         """
+        if not self._bits and not boxes_px:  # no tracks, nothing seen: the usual quiet frame
+            return []
         track_of = self._match(boxes_px)
         mask = self._window_mask
         bits = [(b << 1) & mask for b in self._bits]

@@ -144,7 +144,11 @@ class Detector:
         self.last_regions = regions
         # a frame holds a handful of regions: per-region work is plain Python on lists
         # (numpy's per-call cost would exceed the arithmetic), arrays only where results go out
-        inner = [i for i, edge in enumerate(regions.touches_border.tolist()) if not edge]
+        inner = (
+            [i for i, edge in enumerate(regions.touches_border.tolist()) if not edge]
+            if regions.contours
+            else regions.contours
+        )
         if not inner:
             self.tracker.update_rows([], [])
             return []
@@ -160,10 +164,11 @@ class Detector:
         if not keep:
             self.tracker.update_rows([], [])
             return []
-        feats = np.array([rows[j] for j in keep])
+        rows = [rows[j] for j in keep]
         boxes = [boxes[j] for j in keep]
-        if self._proba_rows is not None and len(keep) <= SCALAR_MAX_REGIONS:
-            proba_rows = self._proba_rows([rows[j] for j in keep])
+        feats = np.array(rows)
+        if self._proba_rows is not None and len(rows) <= SCALAR_MAX_REGIONS:
+            proba_rows = self._proba_rows(rows)
             proba = np.array(proba_rows)
             noise = self._noise_col
             p_target = [1.0 - p[noise] for p in proba_rows]

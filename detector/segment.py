@@ -24,6 +24,10 @@ import numpy as np
 
 # below this many contours a Python loop over cv2 calls beats the vectorised path (measured: 40 contours ~ equal)
 _FEW_CONTOURS = 32
+# the regions of a frame where nothing moved, shared: zero-size arrays hold nothing to change
+_NO_BOXES = np.zeros((0, 4), np.int32)
+_NO_AREAS = np.zeros(0, np.float64)
+_NO_FLAGS = np.zeros(0, bool)
 
 
 @dataclass(frozen=True)
@@ -213,6 +217,8 @@ class Segmenter:
                 box_rows.append((x, y, w, h))
                 area_rows.append(area)
                 touch_rows.append(x <= 0 or y <= 0 or x + w >= width_px or y + h >= height_px)
+            if not kept:  # the usual frame: nothing moved (zero-size arrays cannot be mutated)
+                return Regions(_NO_BOXES, _NO_AREAS, kept, _NO_FLAGS, foreground_fraction, fg)
             boxes = np.array(box_rows, np.int32).reshape(-1, 4)
             areas = np.array(area_rows, np.float64)
             touches = np.array(touch_rows, bool)
