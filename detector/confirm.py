@@ -218,20 +218,20 @@ class Tracker:
         max_d = self.max_distance_diag
         max_d_floor = max(max_d, 1e-9)
         min_iou = self.min_iou
-        # per box: right and bottom edges, area, centre
+        # per box: corners, area, centre (conditional expressions: cheaper than min/max calls)
         extents = [
-            (bx + bw, by + bh, bw * bh, bx + bw / 2, by + bh / 2) for bx, by, bw, bh in boxes
+            (bx, by, bx + bw, by + bh, bw * bh, bx + bw / 2, by + bh / 2)
+            for bx, by, bw, bh in boxes
         ]
         pairs = []
         for ti, (px, py, pw, ph) in enumerate(pred):
             p_right, p_bottom, p_area = px + pw, py + ph, pw * ph
             pcx, pcy = px + pw / 2, py + ph / 2
             diag = max(math.hypot(pw, ph), 1.0)
-            for di, (bx, by, _, _) in enumerate(boxes):
-                b_right, b_bottom, b_area, bcx, bcy = extents[di]
+            for di, (bx, by, b_right, b_bottom, b_area, bcx, bcy) in enumerate(extents):
                 dist = math.hypot(pcx - bcx, pcy - bcy) / diag
-                iw = min(p_right, b_right) - max(px, bx)
-                ih = min(p_bottom, b_bottom) - max(py, by)
+                iw = (p_right if p_right < b_right else b_right) - (px if px > bx else bx)
+                ih = (p_bottom if p_bottom < b_bottom else b_bottom) - (py if py > by else by)
                 if dist > max_d and min_iou > 0.0 and (iw <= 0.0 or ih <= 0.0):
                     continue  # far apart and no overlap: IoU 0 < min_iou
                 inter = (iw if iw > 0.0 else 0.0) * (ih if ih > 0.0 else 0.0)
