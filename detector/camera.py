@@ -136,7 +136,7 @@ class CameraModel(BaseModel):
         """OpenCV distortion vector (k1, k2, p1, p2, k3)."""
         return np.array([self.k1, self.k2, self.p1, self.p2, self.k3], dtype=np.float64)
 
-    @property
+    @cached_property
     def has_distortion(self) -> bool:
         return bool(np.any(self.distortion != 0.0))
 
