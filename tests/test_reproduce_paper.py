@@ -4,6 +4,7 @@ quick mode end to end (outputs exist, matrices are row-normalised, curves are re
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import cv2
@@ -14,7 +15,12 @@ from citysim.render import TruthObject
 from detector.classifier import CLASSES
 from detector.detector import Detection
 from detector.segment import Regions
-from experiments.paper_metrics import (
+
+# experiments/ is the checkout's scripts folder, not an installed package: `python -m pytest`
+# finds it from the working directory, a bare `pytest` (importlib mode) needs the root on the path
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from experiments.paper_metrics import (  # noqa: E402
     VARIANTS,
     Rows,
     confusions,
@@ -23,8 +29,14 @@ from experiments.paper_metrics import (
     tpr_by_distance,
     window_detection,
 )
-from experiments.paper_scenes import PAPER_SCENES, Budget, SceneRecords, film_scene, score_frame
-from experiments.reproduce_paper import QUICK_BUDGET, main, reproduce
+from experiments.paper_scenes import (  # noqa: E402
+    PAPER_SCENES,
+    Budget,
+    SceneRecords,
+    film_scene,
+    score_frame,
+)
+from experiments.reproduce_paper import QUICK_BUDGET, main, reproduce  # noqa: E402
 
 FRAME_PX = 320 * 240
 
