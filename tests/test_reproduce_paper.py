@@ -4,7 +4,6 @@ quick mode end to end (outputs exist, matrices are row-normalised, curves are re
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import cv2
@@ -15,12 +14,7 @@ from citysim.render import TruthObject
 from detector.classifier import CLASSES
 from detector.detector import Detection
 from detector.segment import Regions
-
-# experiments/ is the checkout's scripts folder, not an installed package: `python -m pytest`
-# finds it from the working directory, a bare `pytest` (importlib mode) needs the root on the path
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from experiments.paper_metrics import (  # noqa: E402
+from experiments.paper_metrics import (
     VARIANTS,
     Rows,
     confusions,
