@@ -26,14 +26,12 @@ Agents entirely hidden or out of view are not reported.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 import cv2
 import numpy as np
 
-from citysim import render_light as light
 from citysim.agents import AgentState
 from citysim.render_agents import AgentLighting, AgentPainter, DrawnAgent
 from citysim.render_background import ShadingInputs, StaticScene
@@ -41,19 +39,21 @@ from citysim.render_beams import (
     BEAMS,
     LAMP_HEAD_GLARE,
     LAMP_HEAD_SIZE_M,
-    add_ground_spots,
     agent_glare_sources,
     glare,
-    spot_extent_m,
 )
 from citysim.render_canvas import build_canvas
 from citysim.render_effects import Insects, SensorNoise, draw_rain
 from citysim.render_models import AGENT_MODELS
+from citysim.render_output import FrameOutput
+from citysim.render_spots import add_ground_spots, spot_reach
 from citysim.street import Street
 from detector.camera import CameraModel
 
 #: An agent hidden behind nearer things for more than this fraction is not fully visible.
 MAX_HIDDEN_FRACTION = 0.5
+#: With more agents drawn than this, their visible pixels are counted in one histogram.
+TRUTH_HISTOGRAM_AGENTS = 8
 
 _RANGES: dict[str, tuple[float, float]] = {
     "ir_emitter_power": (0.0, 1e6),
@@ -150,6 +150,7 @@ class CameraRenderer:
             self.lamp_positions_m, np.full(len(self.lamp_positions_m), 1.0)
         )
         self.painter = AgentPainter(self.canvas, params.exposure_ms, params.motion_blur)
+        self.output = FrameOutput(self.canvas)
         self.noise = (
             SensorNoise(rng, camera.height_px, camera.width_px, params.sensor_noise_std_dn)
             if params.sensor_noise_std_dn > 0.0
@@ -157,6 +158,8 @@ class CameraRenderer:
         )
         self.insects = Insects(params.insects_per_min, int(rng.integers(2**63)))
         self._frame_seed = int(rng.integers(2**63))
+        pole, heading = camera.position_m, camera.heading_unit
+        self._forward_axis = (float(pole[0]), float(pole[1]), float(heading[0]), float(heading[1]))
 
     def _levels(self, lamp_levels: Sequence[float]) -> np.ndarray:
         levels = np.asarray(lamp_levels, dtype=np.float64).reshape(-1)
@@ -166,7 +169,8 @@ class CameraRenderer:
             )
         if not self.params.lamp_light:
             return np.zeros_like(levels)
-        return np.clip(np.nan_to_num(levels, nan=0.0), 0.0, 1.0)
+        levels = np.where(levels == levels, levels, 0.0)  # NaN: off
+        return np.minimum(np.maximum(levels, 0.0), 1.0)
 
     def _in_view(self, agents: list[AgentState]) -> tuple[list[AgentState], list[AgentState]]:
         """The agents that may show in this camera (a street holds many more), and the lit
@@ -183,23 +187,11 @@ class CameraRenderer:
         )
         radius = 0.5 * np.linalg.norm(pos[:, 3:], axis=1) + 1.0  # + members' spread, walkers' limbs
         seen = self.canvas.spheres_in_view(pos[:, :3], radius)
-        lit = [(a, BEAMS[a.cls]) for a in agents if a.light_on and a.cls in BEAMS]
+        lit = [a for a in agents if a.light_on and a.cls in BEAMS]
         spots = []
         if lit:
-            centre, reach = [], []
-            for a, spec in lit:
-                f_far, half_w = spot_extent_m(spec)
-                mid = 0.5 * (a.length_m + f_far)
-                centre.append(
-                    [
-                        a.x_m + mid * math.cos(a.heading_rad),
-                        a.y_m + mid * math.sin(a.heading_rad),
-                        0.0,
-                    ]
-                )
-                reach.append(math.hypot(0.5 * f_far + a.length_m, half_w))
-            shown = self.canvas.spheres_in_view(np.array(centre), np.array(reach))
-            spots = [a for (a, _), ok in zip(lit, shown, strict=True) if ok]
+            shown = self.canvas.spheres_in_view(*spot_reach(lit))
+            spots = [a for a, ok in zip(lit, shown, strict=True) if ok]
         return [a for a, ok in zip(agents, seen, strict=True) if ok], spots
 
     def render(
@@ -212,87 +204,125 @@ class CameraRenderer:
         """The frame at time ``t_s`` (s) with ``agents`` and each street lamp at ``lamp_levels`` (0..1).
 
         Sensor noise and rain come from the renderer's generator, in call order;
-        with ``frame_index`` (>= 0) they come from a generator seeded by that
-        index instead, so a frame is the same whichever frames were rendered
-        before it (cameras that skip idle frames stay comparable).
+        with ``frame_index`` (>= 0) they are a function of that index and the
+        renderer's seed instead, so a frame is the same whichever frames were
+        rendered before it (cameras that skip idle frames stay comparable).
         """
         p = self.params
-        if frame_index is None:
-            rng = self.rng
-        elif frame_index < 0:
+        if frame_index is not None and frame_index < 0:
             raise ValueError(f"frame_index: must be >= 0, got {frame_index}")
-        else:
-            rng = np.random.default_rng([self._frame_seed, frame_index])
         levels = self._levels(lamp_levels)
         agents, lit = self._in_view(list(agents))
-        img, depth = self.scene.compose(t_s, levels)
+        self._still_view(levels)
+        img = self.output.work
+        depth, boxes = self.scene.sway(t_s, levels, img)
 
         spot_gain = 1.0 - p.ambient_light
-        if spot_gain > 0.0:
-            add_ground_spots(self.scene, img, lit, spot_gain)
+        if spot_gain > 0.0 and lit:
+            box = add_ground_spots(self.scene, img, lit, spot_gain)
+            if box is not None:
+                boxes.append(box)
 
         on = levels > 0.0
-        lighting = AgentLighting(
+        lighting = AgentLighting.of(
             p.ir_emitter_power, p.ambient_light, self.lamp_positions_m[on], levels[on]
         )
         labels = np.zeros(self.canvas.shape, np.uint8 if len(agents) < 255 else np.uint16)
-        drawn = self.painter.paint(agents, lighting, img, depth, labels)
+        drawn, drawn_boxes = self.painter.paint(
+            agents, lighting, img, depth, self.scene.nearest_occluder, labels
+        )
+        boxes += drawn_boxes
 
         wet = p.rain_drops_per_frame > 0
         pts, power, size = agent_glare_sources(self.canvas, agents, p.ambient_light)
-        heads = on & self._heads_in_view
-        if heads.any():
-            pts = np.concatenate([pts, self.lamp_positions_m[heads]])
-            power = np.concatenate([power, LAMP_HEAD_GLARE * levels[heads]])
-            size = np.concatenate([size, np.full(int(heads.sum()), LAMP_HEAD_SIZE_M)])
-        glare(self.canvas, img, depth, pts, power, size, wet)
+        boxes += glare(self.canvas, img, depth, pts, power, size, wet)
         exposure_s = p.exposure_ms / 1000.0
-        draw_rain(
-            self.canvas,
-            img,
-            p.rain_drops_per_frame,
-            exposure_s,
-            p.ir_emitter_power,
-            p.ambient_light,
-            rng,
-        )
-        self.insects.draw(
+        if wet:
+            rng = (
+                self.rng
+                if frame_index is None
+                else np.random.default_rng([self._frame_seed, frame_index])
+            )
+            draw_rain(
+                self.canvas,
+                img,
+                p.rain_drops_per_frame,
+                exposure_s,
+                p.ir_emitter_power,
+                p.ambient_light,
+                rng,
+            )
+            boxes.append((0, 0, self.canvas.width_px, self.canvas.height_px))
+        boxes += self.insects.draw(
             self.canvas, img, max(t_s, 0.0), exposure_s, p.ir_emitter_power, p.ambient_light
         )
 
-        frame = self.canvas.to_frame(light.radiance_to_dn(img))
+        frame, frame_labels = self.output.finish(boxes, labels if drawn else None, drawn_boxes)
         if self.noise is not None:
-            frame = self.noise.apply(frame, rng)
-        truth = self._truth(agents, drawn, labels) if drawn else ()
+            if frame_index is None:
+                pick = self.noise.pick(self.rng)
+            else:
+                pick = self.noise.pick_for(self._frame_seed, frame_index)
+            frame = self.noise.apply(frame, pick)
+        truth = self._truth(agents, drawn, labels, frame_labels) if drawn else ()
         return RenderedFrame(frame, truth)
 
+    def _still_view(self, levels: np.ndarray) -> None:
+        """Bring the cached frame of the still view (lit background, lamp heads' glare) up to
+        the lamps' levels."""
+        key, lit = self.scene.lit(levels)
+        heads = (levels > 0.0) & self._heads_in_view
+        key = (key, tuple(levels[heads].tolist()))
+        if key == self.output.key:
+            return
+        layer = np.zeros(self.canvas.shape, np.float32)
+        glare_boxes = glare(
+            self.canvas,
+            layer,
+            self.scene.occluder_depth,
+            self.lamp_positions_m[heads],
+            LAMP_HEAD_GLARE * levels[heads],
+            np.full(int(heads.sum()), LAMP_HEAD_SIZE_M),
+            self.params.rain_drops_per_frame > 0,
+        )
+        self.output.set_background(key, lit, layer, np.array(glare_boxes).reshape(-1, 4))
+
     def _truth(
-        self, agents: list[AgentState], drawn: list[DrawnAgent], labels: np.ndarray
+        self,
+        agents: list[AgentState],
+        drawn: list[DrawnAgent],
+        labels: np.ndarray,
+        frame_labels: np.ndarray,
     ) -> tuple[TruthObject, ...]:
         fw, fh = self.camera.width_px, self.camera.height_px
-        xy = np.array([[a.x_m, a.y_m] for a in agents])
-        forward_m = self.camera.forward_and_lateral_m(xy)[:, 0]
         drawn = sorted(drawn, key=lambda d: d.index)
-        boxes = [self.canvas.frame_box(d.roi) for d in drawn]
-        # a few agents: remap their boxes one by one; many: one remap of the whole label image
-        whole = self.canvas.to_frame(labels, nearest=True) if len(drawn) > 8 else None
-        if labels.dtype == np.uint8:
-            counts = cv2.calcHist([labels], [0], None, [256], [0, 256]).ravel()
-        else:
-            counts = np.bincount(labels.ravel(), minlength=len(agents) + 1)
+        boxes = self.canvas.frame_boxes(np.array([d.roi for d in drawn])).tolist()
+        # visible pixels: counted agent by agent when few, in one histogram when many
+        counts = None
+        if len(drawn) > TRUTH_HISTOGRAM_AGENTS:
+            if labels.dtype == np.uint8:
+                counts = cv2.calcHist([labels], [0], None, [256], [0, 256]).ravel().tolist()
+            else:
+                counts = np.bincount(labels.ravel(), minlength=len(agents) + 1).tolist()
+        px, py, hx, hy = self._forward_axis
         out = []
         for d, box in zip(drawn, boxes, strict=True):
-            visible_px = int(counts[d.label])
-            if box is None or visible_px == 0:
+            x0, y0, x1, y1 = box
+            if x1 <= x0 or y1 <= y0:
                 continue
-            if whole is None:
-                frame_labels = self.canvas.to_frame_box(labels, box)
+            if counts is None:
+                rx0, ry0, rx1, ry1 = d.roi
+                mine = cv2.compare(labels[ry0:ry1, rx0:rx1], d.label, cv2.CMP_EQ)
+                visible_px = cv2.countNonZero(mine)
             else:
-                frame_labels = whole[box[1] : box[3], box[0] : box[2]]
-            bx, by, bw, bh = cv2.boundingRect(cv2.compare(frame_labels, d.label, cv2.CMP_EQ))
+                visible_px = counts[d.label]
+            if visible_px == 0:
+                continue
+            mine = cv2.compare(frame_labels[y0:y1, x0:x1], d.label, cv2.CMP_EQ)
+            bx, by, bw, bh = cv2.boundingRect(mine)
             if bw == 0:
                 continue
-            x, y = bx + box[0], by + box[1]
+            x, y = bx + x0, by + y0
             touches = x == 0 or y == 0 or x + bw == fw or y + bh == fh
             hidden = 1.0 - min(visible_px / d.silhouette_px, 1.0)
             agent = agents[d.index]
@@ -306,7 +336,8 @@ class CameraRenderer:
                     int(bh),
                     bool(touches),
                     bool(not touches and hidden <= MAX_HIDDEN_FRACTION),
-                    float(forward_m[d.index]),
+                    # the forward ground distance of the footprint centre (eq. 4's quantity)
+                    float((agent.x_m - px) * hx + (agent.y_m - py) * hy),
                 )
             )
         return tuple(out)

@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from citysim import render_light as light
-from citysim.render_canvas import Canvas, canvas_hull_px, roi_of
+from citysim.render_canvas import BoxMinimum, Canvas, canvas_hull_px, roi_of
 from citysim.render_scenery import Ellipsoid, Solid, _grain, ground_reflectance, scenery_parts
 from citysim.street import Street
 
@@ -239,8 +239,15 @@ class StaticScene:
             if moves
         )
         self.crowns = tuple(c for c in sprites if c is not None)
+        reach = self.occluder_depth.copy()
+        for crown in self.crowns:  # wherever a crown may sway, it may hide what is behind
+            x0, y0, x1, y1 = crown.roi
+            np.minimum(reach[y0:y1, x0:x1], crown.near_m, out=reach[y0:y1, x0:x1])
+        #: lower bound of the frame's occluder depth over canvas boxes, whatever the sway
+        self.nearest_occluder = BoxMinimum(reach)
         self._lit_key: tuple[float, ...] | None = None
         self._lit = self.base
+        self._depth: np.ndarray | None = None  # this frame's depth, when crowns sway
 
     # ------------------------------------------------------------------ build
     def _pools(self, hit: np.ndarray, pools_hit: np.ndarray, n: int) -> tuple[LampPool, ...]:
@@ -324,9 +331,9 @@ class StaticScene:
         )
 
     # -------------------------------------------------------------- per frame
-    def compose(self, t_s: float, lamp_levels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """This frame's background: (radiance (H, W) float32, a fresh array; depth of standing
-        surfaces (H, W) float32, the cached array unless crowns moved - do not write to it)."""
+    def lit(self, lamp_levels: np.ndarray) -> tuple[tuple[float, ...], np.ndarray]:
+        """The background lit by the lamps at ``lamp_levels``, crowns at rest left out:
+        (key of the lighting, radiance (H, W) float32; cached - do not write to it)."""
         key = tuple(float(lamp_levels[pool.lamp_index]) for pool in self.pools)
         if key != self._lit_key:  # lamps change level now and then: re-light only then
             lit = self.base.copy()
@@ -336,13 +343,24 @@ class StaticScene:
                     view = lit[y0:y1, x0:x1]
                     cv2.scaleAdd(pool.radiance, level, view, dst=view)
             self._lit, self._lit_key = lit, key
-        img = self._lit.copy()
+        return key, self._lit
+
+    def sway(
+        self, t_s: float, lamp_levels: np.ndarray, img: np.ndarray
+    ) -> tuple[np.ndarray, list[tuple[int, int, int, int]]]:
+        """Composite the swaying crowns at time t into ``img`` (radiance): (this frame's depth of
+        standing surfaces (H, W) float32 - do not write to it; the canvas boxes drawn on)."""
         if not self.crowns:
-            return img, self.occluder_depth
-        depth = self.occluder_depth.copy()
+            return self.occluder_depth, []
+        if self._depth is None:
+            self._depth = self.occluder_depth.copy()
+        depth = self._depth
+        for crown in self.crowns:  # last frame's poses out
+            x0, y0, x1, y1 = crown.roi
+            depth[y0:y1, x0:x1] = self.occluder_depth[y0:y1, x0:x1]
         for crown in self.crowns:
             self._composite_crown(crown, t_s, lamp_levels, img, depth)
-        return img, depth
+        return depth, [crown.roi for crown in self.crowns]
 
     def _composite_crown(
         self,

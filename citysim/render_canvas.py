@@ -19,7 +19,7 @@ pixel's ideal position. World frame of DESIGN.md, metres.
 
 from __future__ import annotations
 
-import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -51,6 +51,9 @@ class Canvas:
     cos_off_axis: np.ndarray
     #: (u, v) each (H, W) float32: frame position (distorted) of each canvas pixel; None when frame == canvas
     frame_uv: tuple[np.ndarray, np.ndarray] | None = None
+    #: (H, W, 2) int16 map for ``cv2.remap`` frame <- canvas, each frame pixel's nearest canvas
+    #: pixel (a nearest remap needs no interpolation table: half the cost)
+    nearest_map: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -78,12 +81,19 @@ class Canvas:
         """A canvas-size image -> the camera's (distorted) frame."""
         if self.remap_maps is None:
             return canvas_img
-        interp = cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR
+        if nearest:
+            return cv2.remap(
+                canvas_img,
+                self.nearest_map,
+                None,
+                cv2.INTER_NEAREST,
+                borderMode=cv2.BORDER_REPLICATE,
+            )
         return cv2.remap(
             canvas_img,
             self.remap_maps[0],
             self.remap_maps[1],
-            interp,
+            cv2.INTER_LINEAR,
             borderMode=cv2.BORDER_REPLICATE,
         )
 
@@ -108,43 +118,54 @@ class Canvas:
         normals = np.array([[1.0, 0.0, -a_l], [-1.0, 0.0, a_r], [0.0, 1.0, -b_t], [0.0, -1.0, b_b]])
         return normals / np.linalg.norm(normals, axis=1, keepdims=True)
 
-    def frame_box(self, roi: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
-        """Frame box (x0, y0, x1, y1), exclusive ends, that holds everything of canvas box ``roi``."""
-        x0, y0, x1, y1 = roi
+    def frame_boxes(self, rois: np.ndarray) -> np.ndarray:
+        """(N, 4) canvas boxes (x0, y0, x1, y1), exclusive ends -> (N, 4) frame boxes that
+        hold everything of each canvas box, clipped to the frame (empty: x1 <= x0 or y1 <= y0)."""
+        r = np.asarray(rois, dtype=np.int64).reshape(-1, 4)
         if self.frame_uv is None:
-            return roi
+            return r.copy()
         # the lens maps the box's border to its image's border, a gently bent rectangle: its
         # extremes are at the corners or edge midpoints (1 px of margin covers the bending)
-        xm, ym = (x0 + x1) // 2, (y0 + y1) // 2
-        samples = (
-            (y0, x0),
-            (y0, xm),
-            (y0, x1 - 1),
-            (ym, x0),
-            (ym, x1 - 1),
-            (y1 - 1, x0),
-            (y1 - 1, xm),
-            (y1 - 1, x1 - 1),
+        cols = np.column_stack([r[:, 0], (r[:, 0] + r[:, 2]) // 2, r[:, 2] - 1])
+        rows = np.column_stack([r[:, 1], (r[:, 1] + r[:, 3]) // 2, r[:, 3] - 1])
+        uv = self._frame_uv_stacked[rows[:, :, None], cols[:, None, :]].reshape(len(r), 9, 2)
+        out = np.concatenate(
+            [np.floor(uv.min(axis=1)) - 2.0, np.ceil(uv.max(axis=1)) + 3.0], axis=1
         )
-        fu = [self.frame_uv[0][p] for p in samples]
-        fv = [self.frame_uv[1][p] for p in samples]
-        lo = (math.floor(min(fu)) - 2, math.floor(min(fv)) - 2)
-        hi = (math.ceil(max(fu)) + 3, math.ceil(max(fv)) + 3)
         fw, fh = self.camera.width_px, self.camera.height_px
-        fx0, fy0 = max(int(lo[0]), 0), max(int(lo[1]), 0)
-        fx1, fy1 = min(int(hi[0]), fw), min(int(hi[1]), fh)
-        if fx1 <= fx0 or fy1 <= fy0:
-            return None
-        return fx0, fy0, fx1, fy1
+        return np.minimum(np.maximum(out, 0.0), [fw, fh, fw, fh]).astype(np.int64)
 
-    def to_frame_box(self, canvas_img: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
-        """The frame box ``box`` (x0, y0, x1, y1) of ``to_frame(canvas_img, nearest=True)``, computed alone."""
+    @cached_property
+    def _frame_uv_stacked(self) -> np.ndarray:
+        return np.stack(self.frame_uv, axis=-1)
+
+    def remap_box(
+        self, canvas_img: np.ndarray, box: Sequence[int], out: np.ndarray, nearest: bool = False
+    ) -> None:
+        """Write the frame box ``box`` (x0, y0, x1, y1) of ``to_frame(canvas_img)`` into the
+        same box of ``out`` (frame size), computing only that box."""
         x0, y0, x1, y1 = box
         if self.remap_maps is None:
-            return canvas_img[y0:y1, x0:x1]
-        m1 = np.ascontiguousarray(self.remap_maps[0][y0:y1, x0:x1])
-        m2 = np.ascontiguousarray(self.remap_maps[1][y0:y1, x0:x1])
-        return cv2.remap(canvas_img, m1, m2, cv2.INTER_NEAREST, borderMode=cv2.BORDER_REPLICATE)
+            out[y0:y1, x0:x1] = canvas_img[y0:y1, x0:x1]
+            return
+        if nearest:
+            cv2.remap(
+                canvas_img,
+                self.nearest_map[y0:y1, x0:x1],
+                None,
+                cv2.INTER_NEAREST,
+                dst=out[y0:y1, x0:x1],
+                borderMode=cv2.BORDER_REPLICATE,
+            )
+            return
+        cv2.remap(
+            canvas_img,
+            self.remap_maps[0][y0:y1, x0:x1],
+            self.remap_maps[1][y0:y1, x0:x1],
+            cv2.INTER_LINEAR,
+            dst=out[y0:y1, x0:x1],
+            borderMode=cv2.BORDER_REPLICATE,
+        )
 
 
 def build_canvas(camera: CameraModel, distortion: bool) -> Canvas:
@@ -152,6 +173,7 @@ def build_canvas(camera: CameraModel, distortion: bool) -> Canvas:
     w, h = camera.width_px, camera.height_px
     maps = None
     frame_uv = None
+    nearest_map = None
     x0 = y0 = 0
     cw, ch = w, h
     if distortion and camera.has_distortion:
@@ -167,6 +189,7 @@ def build_canvas(camera: CameraModel, distortion: bool) -> Canvas:
         map_x = (ideal[:, 0] - x0).reshape(h, w).astype(np.float32)
         map_y = (ideal[:, 1] - y0).reshape(h, w).astype(np.float32)
         maps = cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+        nearest_map = np.rint(np.stack([map_x, map_y], axis=-1)).astype(np.int16)
     cols, rows = np.meshgrid(
         np.arange(cw, dtype=np.float64) + x0, np.arange(ch, dtype=np.float64) + y0
     )
@@ -192,7 +215,16 @@ def build_canvas(camera: CameraModel, distortion: bool) -> Canvas:
             np.ascontiguousarray(fwd[..., 1], np.float32),
         )
     return Canvas(
-        camera, x0, y0, cw, ch, maps, rays_world, (1.0 / norm).astype(np.float32), frame_uv
+        camera,
+        x0,
+        y0,
+        cw,
+        ch,
+        maps,
+        rays_world,
+        (1.0 / norm).astype(np.float32),
+        frame_uv,
+        nearest_map,
     )
 
 
@@ -235,3 +267,57 @@ def roi_of(uv: np.ndarray, canvas: Canvas, margin_px: int = 1) -> tuple[int, int
     if x1 <= x0 or y1 <= y0:
         return None
     return x0, y0, x1, y1
+
+
+#: Box minima are looked up on cells of this many pixels a side.
+RANGE_MIN_CELL_PX = 8
+
+
+class BoxMinimum:
+    """Lower bound of an image's values over canvas boxes, for many boxes at once.
+
+    The image is reduced to the minimum of each RANGE_MIN_CELL_PX square cell,
+    and a 2-D sparse table (minima over 2^a x 2^b cells at every cell) answers
+    each box with four look-ups. The bound is exact on cell boundaries and
+    conservative (never above the true minimum) elsewhere.
+    """
+
+    def __init__(self, image: np.ndarray) -> None:
+        c = RANGE_MIN_CELL_PX
+        h, w = image.shape
+        hc, wc = (h + c - 1) // c, (w + c - 1) // c
+        padded = np.full((hc * c, wc * c), np.inf, np.float32)
+        padded[:h, :w] = image
+        cells = padded.reshape(hc, c, wc, c).min(axis=(1, 3))
+        ly, lx = max(hc.bit_length() - 1, 0), max(wc.bit_length() - 1, 0)
+        table = np.full((ly + 1, lx + 1, hc, wc), np.inf, np.float32)
+        table[0, 0] = cells
+        for a in range(ly + 1):
+            if a > 0:
+                s = 1 << (a - 1)
+                table[a, 0, : hc - s] = np.minimum(table[a - 1, 0, : hc - s], table[a - 1, 0, s:])
+            for b in range(1, lx + 1):
+                s = 1 << (b - 1)
+                table[a, b, :, : wc - s] = np.minimum(
+                    table[a, b - 1, :, : wc - s], table[a, b - 1, :, s:]
+                )
+        self._table = table
+        span = np.arange(max(hc, wc) + 1)
+        self._log2 = np.zeros(len(span), np.int64)  # floor(log2(span)), span >= 1
+        self._log2[1:] = np.floor(np.log2(span[1:])).astype(np.int64)
+
+    def of(self, boxes: np.ndarray) -> np.ndarray:
+        """(N,) minimum over each canvas box (N, 4) int (x0, y0, x1, y1), exclusive ends,
+        non-empty and inside the canvas."""
+        c = RANGE_MIN_CELL_PX
+        b = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
+        lo = b[:, :2] // c  # first cells (x, y)
+        hi = (b[:, 2:] - 1) // c + 1  # one past the last cells
+        level = self._log2[hi - lo]  # (N, 2): the largest power of two in each span
+        start = hi - (1 << level)
+        t = self._table
+        kx, ky = level[:, 0], level[:, 1]
+        return np.minimum(
+            np.minimum(t[ky, kx, lo[:, 1], lo[:, 0]], t[ky, kx, lo[:, 1], start[:, 0]]),
+            np.minimum(t[ky, kx, start[:, 1], lo[:, 0]], t[ky, kx, start[:, 1], start[:, 0]]),
+        )

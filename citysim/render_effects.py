@@ -5,7 +5,8 @@
   noise frames is drawn once from the run's generator and every frame takes a
   random crop, shift and sign of one of them (8 x 33 x 33 x 2 = 17 k distinct
   fields; any one pixel's values over time stay Gaussian and independent
-  enough for a background model).
+  enough for a background model). The noise is rounded to whole DN, as the
+  sensor's converter would.
 * ``Rain``: drops close to the lens, lit by the emitter and smeared by the
   exposure into short near-vertical streaks.
 * ``Insects``: moths at the emitter, 0.15-1.5 m from the lens: big, bright,
@@ -31,30 +32,54 @@ from citysim.render_canvas import Canvas, roi_of
 
 NOISE_BANK_FRAMES = 8
 NOISE_SHIFT_PX = 32
-#: The bank stores noise in int8 at this many steps per standard deviation.
-NOISE_STEPS_PER_STD = 16.0
+_MASK64 = (1 << 64) - 1
 
 
 class SensorNoise:
-    """Additive Gaussian read noise with standard deviation ``std_dn`` (DN)."""
+    """Additive Gaussian read noise with standard deviation ``std_dn`` (DN), rounded to whole DN."""
 
     def __init__(
         self, rng: np.random.Generator, height_px: int, width_px: int, std_dn: float
     ) -> None:
         self.std_dn = std_dn
         shape = (NOISE_BANK_FRAMES, height_px + NOISE_SHIFT_PX, width_px + NOISE_SHIFT_PX)
-        bank = rng.standard_normal(shape, dtype=np.float32) * NOISE_STEPS_PER_STD
-        self.bank = np.clip(np.round(bank), -127, 127).astype(np.int8)
+        dn = np.clip(np.rint(rng.standard_normal(shape, dtype=np.float32) * std_dn), -255, 255)
+        # signed noise as two saturating uint8 steps (add the positive part, subtract the
+        # negative): exact, since a pixel's noise has one sign, and far cheaper than a
+        # mixed-type weighted sum
+        self.up = np.maximum(dn, 0).astype(np.uint8)
+        self.down = np.maximum(-dn, 0).astype(np.uint8)
         self.shape = (height_px, width_px)
 
-    def apply(self, frame_u8: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        b, dy, dx, sign = rng.integers(
-            (NOISE_BANK_FRAMES, NOISE_SHIFT_PX + 1, NOISE_SHIFT_PX + 1, 2)
+    @staticmethod
+    def pick(rng: np.random.Generator) -> tuple[int, int, int, int]:
+        """A random (bank frame, row shift, column shift, sign) from ``rng``."""
+        return tuple(
+            rng.integers((NOISE_BANK_FRAMES, NOISE_SHIFT_PX + 1, NOISE_SHIFT_PX + 1, 2)).tolist()
         )
+
+    @staticmethod
+    def pick_for(seed: int, frame_index: int) -> tuple[int, int, int, int]:
+        """The (bank frame, row shift, column shift, sign) of frame ``frame_index``: a
+        splitmix64 hash of the seed and index (a generator per frame costs more than the
+        noise itself)."""
+        x = (seed + (frame_index + 1) * 0x9E3779B97F4A7C15) & _MASK64
+        x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
+        x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK64
+        x ^= x >> 31
+        out = []
+        for n in (NOISE_BANK_FRAMES, NOISE_SHIFT_PX + 1, NOISE_SHIFT_PX + 1, 2):
+            x, r = divmod(x, n)
+            out.append(r)
+        return tuple(out)
+
+    def apply(self, frame_u8: np.ndarray, pick: tuple[int, int, int, int]) -> np.ndarray:
+        """``frame_u8`` plus the noise field ``pick`` (see ``pick``): a fresh array."""
+        b, dy, dx, sign = pick
         h, w = self.shape
-        crop = self.bank[b, dy : dy + h, dx : dx + w]
-        scale = (1.0 if sign else -1.0) * self.std_dn / NOISE_STEPS_PER_STD
-        return cv2.addWeighted(frame_u8, 1.0, crop, scale, 0.0, dtype=cv2.CV_8U)
+        up, down = (self.up, self.down) if sign else (self.down, self.up)
+        out = cv2.add(frame_u8, up[b, dy : dy + h, dx : dx + w])
+        return cv2.subtract(out, down[b, dy : dy + h, dx : dx + w], dst=out)
 
 
 #: Terminal speed of rain drops, m/s.
@@ -196,12 +221,17 @@ class Insects:
         exposure_s: float,
         emitter_power: float,
         ambient_light: float,
-    ) -> None:
+    ) -> list[tuple[int, int, int, int]]:
+        """Draw the insects alive at time t; returns the canvas boxes drawn on."""
+        boxes = []
         for bug in self.active(canvas, t_s):
             now = bug.position_m(t_s)
             before = bug.position_m(max(t_s - exposure_s, bug.born_s))
             if INSECT_NEAR_M * 0.5 < now[2] < INSECT_FAR_M * 2 and before[2] > 0.05:
-                self._draw_one(canvas, img, now, before, emitter_power, ambient_light)
+                box = self._draw_one(canvas, img, now, before, emitter_power, ambient_light)
+                if box is not None:
+                    boxes.append(box)
+        return boxes
 
     @staticmethod
     def _draw_one(
@@ -211,7 +241,7 @@ class Insects:
         before: np.ndarray,
         emitter_power: float,
         ambient_light: float,
-    ) -> None:
+    ) -> tuple[int, int, int, int] | None:
         uv = canvas.cam_to_canvas(np.stack([now, before]))
         z = now[2]
         core_px = max(canvas.camera.fx_px * INSECT_SIZE_M / z, 1.0)
@@ -219,7 +249,7 @@ class Insects:
         pad = int(math.ceil(core_px + 3.0 * sigma_px)) + 1
         roi = roi_of(uv, canvas, margin_px=pad)
         if roi is None:
-            return
+            return None
         x0, y0, x1, y1 = roi
         layer = np.zeros((y1 - y0, x1 - x0), np.float32)
         a, b = np.round((uv - [x0, y0]) * 16).astype(np.int32)
@@ -244,3 +274,4 @@ class Insects:
         cv2.scaleAdd(
             layer, float(min(brightness, 50.0) * core_px / (core_px + streak_px)), view, dst=view
         )
+        return roi

@@ -2,9 +2,10 @@
 
 A registry maps ``AgentState.cls`` to how its model is keyed (everything but
 the pose) and built at the origin. The renderer caches models by key, with
-gait phases rounded to PHASE_STEPS per cycle, and poses all agents in one
-vectorised rotation + translation; ``agent_shape`` gives one agent's exact
-model at its pose (for tests and tools).
+gait phases rounded to PHASE_STEPS per cycle, together with each part's
+outline table (``citysim.render_outline``), and poses all agents in one
+vectorised rotation + translation (``draw_models``); ``agent_shape`` gives one
+agent's exact model at its pose (for tests and tools).
 
 Conventions: world frame of DESIGN.md (x, y ground, z up, m); ``heading_rad``
 counter-clockwise from +x; model dimensions as in ``detector.shapes``.
@@ -20,6 +21,7 @@ from functools import lru_cache
 import numpy as np
 
 from citysim.agents import AgentState
+from citysim.render_outline import KnownTopology, model_topology
 from detector.shapes import (
     Shape,
     animal_shape,
@@ -134,17 +136,80 @@ def _place(
     return out
 
 
-def posed_models(agents: Sequence[AgentState]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """All agents' cached models placed at their poses in one go:
-    (corners (sum P, K, 3) world, reflectances (sum P,), parts per agent (N,))."""
-    locals_ = [_model_at_origin(_model_of(a).key(a, quantised_phase)) for a in agents]
-    n_parts = np.array([m.n_parts for m in locals_])
-    pose = np.array([[a.x_m, a.y_m, a.heading_rad] for a in agents])
-    per_part = np.repeat(pose, n_parts, axis=0)
-    corners = _place(
-        np.concatenate([m.corners_m for m in locals_]),
-        per_part[:, 0],
-        per_part[:, 1],
-        per_part[:, 2],
-    )
-    return corners, np.concatenate([m.ir_reflectance for m in locals_]), n_parts
+@dataclass(frozen=True, eq=False)
+class DrawModel:
+    """One cached model at the origin, heading +x, ready for drawing.
+
+    ``geometry`` (P, K + 1 + MAX_FACES, 3) stacks each part's K vertices, its
+    centre (the vertices' mean) and its faces' outward unit normals (zero for
+    unused faces), so that one rotation turns all into the camera frame.
+    ``faces`` (P, 1 + MAX_FACES) holds each part's outline table row (-1: no
+    table, take the hull; ``citysim.render_outline``) and each face's plane
+    offset ``normal . point on the face`` (m; 1 for unused faces): a face looks
+    at a camera at model-frame point c when ``normal . c > offset``.
+    """
+
+    geometry: np.ndarray
+    faces: np.ndarray
+    reflectance: np.ndarray  # (P,)
+
+    @property
+    def n_parts(self) -> int:
+        return len(self.geometry)
+
+
+#: (class, number of parts) -> the part topologies of the last model built: models of one
+#: class share them, so building a model checks them instead of searching
+_TOPOLOGY_HINTS: dict[tuple[str, int], list] = {}
+#: a model's key with its gait phases set to zero -> its parts' topologies, checked once: a
+#: gait only swings limbs (sheared boxes stay boxes), so its other phases reuse them
+_CHECKED_TOPOLOGY: dict[tuple, list] = {}
+#: key -> model, most recent last; the oldest are dropped past MAX_CACHED_MODELS
+_DRAW_MODELS: dict[tuple, DrawModel] = {}
+MAX_CACHED_MODELS = 8192
+
+
+def _still(phase_rad: float) -> float:
+    return 0.0
+
+
+def _build_draw_model(key: tuple, still_key: tuple) -> DrawModel:
+    shape = AGENT_MODELS[key[0]].build(key)
+    corners = shape.corners_m
+    known = _CHECKED_TOPOLOGY.get(still_key)
+    if known is not None and len(known.rows) == len(corners):
+        rows, normals, on_face = known.setup(corners)
+    else:
+        hint_key = (key[0], len(corners))
+        rows, normals, on_face, found = model_topology(
+            corners, _TOPOLOGY_HINTS.get(hint_key, [None] * len(corners))
+        )
+        _TOPOLOGY_HINTS[hint_key] = found
+        if len(_CHECKED_TOPOLOGY) >= MAX_CACHED_MODELS:
+            _CHECKED_TOPOLOGY.pop(next(iter(_CHECKED_TOPOLOGY)))
+        _CHECKED_TOPOLOGY[still_key] = KnownTopology.of(found)
+    geometry = np.concatenate([corners, corners.mean(axis=1, keepdims=True), normals], axis=1)
+    on_plane = corners[np.arange(len(corners))[:, None], on_face]  # (P, F, 3)
+    offsets = np.einsum("pfk,pfk->pf", normals, on_plane)
+    offsets[~np.any(normals != 0.0, axis=2)] = 1.0  # unused faces never look at the camera
+    faces = np.column_stack([rows, offsets])
+    for arr in (geometry, faces):
+        arr.flags.writeable = False
+    return DrawModel(geometry, faces, np.asarray(shape.ir_reflectance, dtype=np.float64))
+
+
+def draw_models(agents: Sequence[AgentState]) -> list[DrawModel]:
+    """Each agent's cached model at the origin (gait phases rounded, see PHASE_STEPS);
+    ValueError naming the class for an unknown one."""
+    out = []
+    for a in agents:
+        maker = _model_of(a)
+        key = maker.key(a, quantised_phase)
+        model = _DRAW_MODELS.get(key)
+        if model is None:
+            model = _build_draw_model(key, maker.key(a, _still))
+            if len(_DRAW_MODELS) >= MAX_CACHED_MODELS:
+                _DRAW_MODELS.pop(next(iter(_DRAW_MODELS)))
+            _DRAW_MODELS[key] = model
+        out.append(model)
+    return out

@@ -1,0 +1,118 @@
+"""Motion blur of agent layers: line kernels, smears, and grouping agents by their motion.
+
+Over the exposure an agent moves across the image; every pixel sees it for
+the fraction of the exposure it covers that pixel. The blur of a layer is
+therefore the average of the layer over its positions from now (offset 0)
+back to ``(du, dv)`` px ago - a line kernel (``cv2.filter2D``).
+
+Agents near each other whose image motions are nearly equal (within 1 px or
+15 %, ``similar_motion``) share one smear, by their mean motion: the
+difference is below what a frame can show.
+
+Conventions: canvas pixels of ``citysim.render_canvas``; ``(du, dv)`` is the
+image displacement (px) from the agent's image at time t back to its image at
+t - exposure.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+#: Below this image motion over the exposure (px), blur is invisible and skipped.
+MIN_BLUR_PX = 0.5
+#: Blur kernels are cached on a grid of this many steps per pixel of motion.
+KERNEL_STEPS_PER_PX = 4
+#: Direct line filters are kept under this many taps; longer smears are done at lower resolution.
+MAX_KERNEL_TAPS = 48
+#: Agents share one smear when their motions differ by at most this many px ...
+SHARED_BLUR_PX = 1.0
+#: ... or this fraction of the longer motion.
+SHARED_BLUR_FRACTION = 0.15
+
+
+def similar_motion(a_px: tuple[float, float], b_px: tuple[float, float]) -> bool:
+    """Whether two image motions (du, dv) are close enough to share one smear."""
+    diff = math.hypot(a_px[0] - b_px[0], a_px[1] - b_px[1])
+    longer = max(math.hypot(*a_px), math.hypot(*b_px))
+    return diff <= max(SHARED_BLUR_PX, SHARED_BLUR_FRACTION * longer)
+
+
+def _blur_kernel(du_px: float, dv_px: float) -> tuple[np.ndarray, tuple[int, int]]:
+    """Line kernel and its anchor for ``cv2.filter2D``: averages the layer over its positions
+    from now (offset 0) back to ``(du, dv)`` px ago. The kernel only spans the line's bounding
+    box, so a horizontal smear stays a cheap 1-3 row filter."""
+    return _line_kernel(round(du_px * KERNEL_STEPS_PER_PX), round(dv_px * KERNEL_STEPS_PER_PX))
+
+
+@lru_cache(maxsize=4096)
+def _line_kernel(du_steps: int, dv_steps: int) -> tuple[np.ndarray, tuple[int, int]]:
+    du_px, dv_px = du_steps / KERNEL_STEPS_PER_PX, dv_steps / KERNEL_STEPS_PER_PX
+    # dst(p) = sum_o k(anchor + o) src(p + o): the layer seen s of the exposure ago sits at
+    # +s*d, so pixel p sees the source at p - s*d: weight at offset o = -s*d (bilinear splat)
+    n = int(math.ceil(2.0 * math.hypot(du_px, dv_px))) + 2
+    s = np.linspace(0.0, 1.0, n)
+    ox, oy = -s * du_px, -s * dv_px
+    ax, ay = -math.floor(min(ox.min(), 0.0)), -math.floor(min(oy.min(), 0.0))
+    width = ax + math.floor(max(ox.max(), 0.0)) + 2
+    height = ay + math.floor(max(oy.max(), 0.0)) + 2
+    x, y = ox + ax, oy + ay
+    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = x - x0, y - y0
+    idx = np.concatenate(
+        [y0 * width + x0, y0 * width + x0 + 1, (y0 + 1) * width + x0, (y0 + 1) * width + x0 + 1]
+    )
+    w = np.concatenate([(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy])
+    kernel = np.bincount(idx, weights=w, minlength=width * height).reshape(height, width)
+    kernel = (kernel / kernel.sum()).astype(np.float32)
+    kernel.flags.writeable = False
+    return kernel, (int(ax), int(ay))
+
+
+def _level(du_px: float, dv_px: float) -> int:
+    """How many times a layer is halved before smearing by (du, dv): long diagonal smears
+    would need big 2-D kernels; their smear is wider than the detail lost."""
+    level = 0
+    while (abs(du_px) / 2**level + 2) * (abs(dv_px) / 2**level + 2) > MAX_KERNEL_TAPS:
+        level += 1
+    return level
+
+
+def _smear(layer: np.ndarray, du_px: float, dv_px: float) -> np.ndarray:
+    """Motion blur of ``layer`` (H, W float32) by the image motion (du, dv) px.
+
+    Layers are halved in resolution until the kernel has at most
+    MAX_KERNEL_TAPS taps, smeared, and scaled back (``_level``).
+    """
+    level = _level(du_px, dv_px)
+    kernel, anchor = _blur_kernel(du_px / 2**level, dv_px / 2**level)
+    if level == 0:
+        return cv2.filter2D(layer, -1, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT)
+    h, w = layer.shape
+    f = 2**level
+    hs, ws = (h + f - 1) // f, (w + f - 1) // f
+    # pad to whole f x f blocks so down- and up-scaling keep pixel centres aligned
+    padded = cv2.copyMakeBorder(layer, 0, hs * f - h, 0, ws * f - w, cv2.BORDER_CONSTANT, value=0.0)
+    small = cv2.resize(padded, (ws, hs), interpolation=cv2.INTER_AREA)
+    small = cv2.filter2D(small, -1, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT)
+    return cv2.resize(small, (ws * f, hs * f), interpolation=cv2.INTER_LINEAR)[:h, :w]
+
+
+def stacked_layers(h: int, w: int, du_px: float, dv_px: float) -> tuple[np.ndarray, int]:
+    """An empty (rows, w) float32 buffer holding two (h, w) layers for one ``smear_stacked``
+    call: the first at rows [0, h), the second from the returned row; the rows between are
+    zero and wide enough that the smear never carries light from one layer to the other."""
+    f = 2 ** _level(du_px, dv_px)
+    gap = f * (math.ceil(abs(dv_px) / f) + 3)
+    start = f * math.ceil((h + gap) / f)  # on a block boundary: both layers scale alike
+    buf = np.empty((start + h, w), np.float32)
+    buf[h:start] = 0.0
+    return buf, start
+
+
+def smear_stacked(buf: np.ndarray, du_px: float, dv_px: float) -> np.ndarray:
+    """``_smear`` of both layers of a ``stacked_layers`` buffer in one filter pass."""
+    return _smear(buf, du_px, dv_px)

@@ -1,0 +1,166 @@
+"""The last step of a frame: canvas radiance -> the camera's 8-bit frame, redoing only what moved.
+
+Most of a street camera's view is still from one frame to the next: the
+lit background changes only when a lamp changes level. So the frame of the
+background alone (radiance -> DN -> lens remap, ``render_canvas``) is kept,
+and a frame is that cached frame with the *boxes* that changed - where
+agents, spots, glare, crowns or insects were drawn on the canvas - converted
+and remapped again. When the boxes cover much of the canvas, the whole frame
+is redone at once instead (cheaper than many boxes).
+
+Light that is added on top of everything and does not move (the street
+lamps' own glare) is kept as a separate radiance layer: it is part of the
+cached frame and added again inside every redone box.
+
+The frame-space label image for the ground truth is made the same way: the
+canvas labels are remapped (nearest) only inside the redone boxes that hold
+agents.
+
+Conventions: canvas and frame pixels of ``citysim.render_canvas``; boxes are
+(x0, y0, x1, y1) with exclusive ends; radiance in linear full-scale units.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+
+from citysim import render_light as light
+from citysim.render_canvas import Canvas
+
+#: Redo the whole frame when the changed boxes cover more than this fraction of the canvas.
+#: Boxes cost about what the whole frame costs per pixel plus a fixed ~10 OpenCV calls each,
+#: but the whole frame also touches the unchanged pixels' memory, which in a simulation
+#: (a detector between two frames) is cold.
+WHOLE_FRAME_FRACTION = 0.8
+#: Fixed cost of one box, in canvas pixels of work.
+BOX_COST_PX = 2500
+
+
+class FrameOutput:
+    """One camera's canvas radiance buffer and its conversion to frames.
+
+    ``work`` is the canvas the renderer draws a frame on. Between frames it
+    holds the lit background (``set_background``); ``finish`` turns it into
+    the frame and puts the background back in the boxes that were drawn on.
+    """
+
+    def __init__(self, canvas: Canvas) -> None:
+        self.canvas = canvas
+        self.key: object = None
+        h, w = canvas.shape
+        self.work = np.zeros((h, w), np.float32)
+        self._background = self.work
+        self._glare = np.zeros((h, w), np.float32)
+        self._glare_boxes = np.zeros((0, 4), np.int64)
+        self._dn = np.zeros((h, w), np.uint8)
+        self._static_dn = self._dn
+        self._static_frame = canvas.to_frame(self._dn)
+
+    def set_background(
+        self, key: object, background: np.ndarray, glare: np.ndarray, glare_boxes: np.ndarray
+    ) -> None:
+        """A new still view: ``background`` radiance (kept, not copied) and the lamps' ``glare``
+        radiance layer (zero outside ``glare_boxes`` (N, 4)). ``key`` names it."""
+        self.key = key
+        self._background = background
+        np.copyto(self.work, background)
+        self._glare = glare
+        self._glare_boxes = np.asarray(glare_boxes, dtype=np.int64).reshape(-1, 4)
+        still = cv2.add(background, glare) if len(self._glare_boxes) else background
+        self._static_dn = light.radiance_to_dn(still)
+        self._dn = self._static_dn.copy()
+        self._static_frame = self.canvas.to_frame(self._static_dn)
+
+    def finish(
+        self,
+        boxes: Sequence[Sequence[int]],
+        labels: np.ndarray | None = None,
+        label_boxes: Sequence[Sequence[int]] = (),
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The frame (uint8, frame size, a fresh array) of ``work`` where everything drawn
+        since the last call lies inside canvas ``boxes``; and, given canvas ``labels`` (zero
+        outside canvas ``label_boxes``), the frame's labels (nearest remap). Puts the
+        background back into ``work``."""
+        canvas = self.canvas
+        h, w = canvas.shape
+        merged = merge_boxes(boxes)
+        b = np.array(merged, dtype=np.int64).reshape(-1, 4)
+        area = int(((b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])).sum())
+        if area + BOX_COST_PX * len(b) > WHOLE_FRAME_FRACTION * h * w:
+            frame = self._whole()
+        else:
+            frame = self._static_frame.copy()
+            if len(b):
+                self._boxes(merged, b, frame)
+        frame_labels = None
+        if labels is not None:
+            frame_labels = np.zeros(frame.shape, labels.dtype)
+            if len(label_boxes):
+                for box in canvas.frame_boxes(np.asarray(label_boxes)).tolist():
+                    if box[2] > box[0] and box[3] > box[1]:
+                        canvas.remap_box(labels, box, frame_labels, nearest=True)
+        return frame, frame_labels
+
+    def _boxes(
+        self, merged: list[tuple[int, int, int, int]], b: np.ndarray, frame: np.ndarray
+    ) -> None:
+        glare = self._glare_touching(b)
+        work, dn = self.work, self._dn
+        for (x0, y0, x1, y1), add_glare in zip(merged, glare, strict=True):
+            view = work[y0:y1, x0:x1]
+            if add_glare:
+                cv2.add(view, self._glare[y0:y1, x0:x1], dst=view)
+            light.radiance_to_dn(view, out=dn[y0:y1, x0:x1])
+        for box in self.canvas.frame_boxes(b).tolist():
+            if box[2] > box[0] and box[3] > box[1]:
+                self.canvas.remap_box(dn, box, frame)
+        background, still = self._background, self._static_dn
+        for x0, y0, x1, y1 in merged:
+            work[y0:y1, x0:x1] = background[y0:y1, x0:x1]
+            dn[y0:y1, x0:x1] = still[y0:y1, x0:x1]
+
+    def _whole(self) -> np.ndarray:
+        if len(self._glare_boxes):
+            cv2.add(self.work, self._glare, dst=self.work)
+        frame = self.canvas.to_frame(light.radiance_to_dn(self.work))
+        np.copyto(self.work, self._background)
+        return frame
+
+    def _glare_touching(self, boxes: np.ndarray) -> list[bool]:
+        """Per box, whether any of the still glare lies in it."""
+        g = self._glare_boxes
+        if not len(g):
+            return [False] * len(boxes)
+        hit = (
+            (boxes[:, None, 0] < g[None, :, 2])
+            & (g[None, :, 0] < boxes[:, None, 2])
+            & (boxes[:, None, 1] < g[None, :, 3])
+            & (g[None, :, 1] < boxes[:, None, 3])
+        )
+        return hit.any(axis=1).tolist()
+
+
+def merge_boxes(boxes: Sequence[Sequence[int]]) -> list[tuple[int, int, int, int]]:
+    """Boxes (x0, y0, x1, y1) joined where one box costs less than two: their joint box
+    holds at most BOX_COST_PX more pixels than the two apart. Empty boxes are dropped."""
+    out: list[list[int]] = []
+    for bx0, by0, bx1, by1 in boxes:
+        if bx1 <= bx0 or by1 <= by0:
+            continue
+        room = (bx1 - bx0) * (by1 - by0) + BOX_COST_PX
+        while True:  # a grown box may now reach others: keep joining
+            for k, (x0, y0, x1, y1) in enumerate(out):
+                jx0, jy0 = min(x0, bx0), min(y0, by0)
+                jx1, jy1 = max(x1, bx1), max(y1, by1)
+                if (jx1 - jx0) * (jy1 - jy0) <= (x1 - x0) * (y1 - y0) + room:
+                    del out[k]
+                    bx0, by0, bx1, by1 = jx0, jy0, jx1, jy1
+                    room = (bx1 - bx0) * (by1 - by0) + BOX_COST_PX
+                    break
+            else:
+                break
+        out.append([bx0, by0, bx1, by1])
+    return [tuple(b) for b in out]
