@@ -40,6 +40,8 @@ from citysim.sweep_spec import ResolvedSweep, SweepError, SweepPoint, load_sweep
 
 __all__ = ["PointResult", "SweepError", "load_sweep", "run_point", "run_sweep"]
 
+#: How long to wait for a scheduler given by address before giving up (s).
+SCHEDULER_TIMEOUT_S = 20.0
 IDENTITY_COLUMNS = ("point_id", "seed", "controller", "status", "error", "finished_at", "wall_s")
 
 
@@ -129,17 +131,16 @@ def connect(scheduler: str | None, workers: int | None) -> _Client:
 
     if scheduler is not None:
         try:
-            return _Client(Client(scheduler, timeout="20s"))
+            return _Client(Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s"))
         except (OSError, TimeoutError) as exc:
             raise SweepError(f"scheduler {scheduler!r}: cannot connect ({exc})") from None
     n = workers if workers is not None else max(1, os.cpu_count() or 1)
-    if n < 1:
-        raise SweepError(f"workers: must be >= 1, got {n}")
     cluster = LocalCluster(
         n_workers=n,
         threads_per_worker=1,
         processes=True,
-        dashboard_address=None,
+        # the scheduler serves HTTP (health checks) even without a dashboard: a free port, not 8787
+        dashboard_address="127.0.0.1:0",
         silence_logs=logging.ERROR,
         host="127.0.0.1",
     )
@@ -190,6 +191,8 @@ def run_sweep(
     Returns ``{"points", "skipped", "ran", "ok", "failed", "results", "sweep_json"}``.
     Raises SweepError (a ValueError) for a bad sweep file, folder or scheduler.
     """
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise SweepError(f"workers: a whole number >= 1, got {workers!r}")
     resolved = load_sweep(sweep_file)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -75,7 +75,8 @@ def bench_sweep_scaling() -> dict:
     out["speedup"] = out["wall_s_1_worker"] / out["wall_s_2_workers"]
     out["rows_match"] = same
     print(f"1 worker {out['wall_s_1_worker']:.1f} s   2 workers {out['wall_s_2_workers']:.1f} s   "
-          f"speedup {out['speedup']:.2f}x   ({out['cpus']} CPUs; wall times include cluster start-up)")  # fmt: skip
+          f"speedup {out['speedup']:.2f}x   rows identical: {same}   "
+          f"({out['cpus']} CPUs; wall times include cluster start-up)")  # fmt: skip
     return out
 
 

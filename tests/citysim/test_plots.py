@@ -225,3 +225,18 @@ def test_labels_carry_units():
     assert axis_label("traffic.classes.vehicle.rate_per_hour") == "vehicle rate (per hour)"
     assert clock_label(22.0, 3) == "01:00"
     assert clock_label(21.5, 0) == "21:30"
+
+
+def test_best_settings_falls_back_to_fewest_unlit_crossings():
+    rows = [
+        {"controller": "detector", "status": "ok", "lamps.camera.tilt_deg": tilt, "seed": seed,
+         "savings_vs_always_on": str(savings), "lag_p95_s": "1.0", "unlit_crossings": str(unlit)}
+        for tilt, seed, savings, unlit in [("20", "1", 0.3, 1), ("20", "2", 0.3, 2),
+                                           ("40", "1", 0.5, 1), ("40", "2", 0.6, 1),
+                                           ("60", "1", 0.9, 3), ("60", "2", 0.9, 0)]
+    ]  # fmt: skip
+    best = best_settings(rows, ["lamps.camera.tilt_deg"])[0]
+    # the worst seed decides: 40 deg has at most 1 unlit crossing, 20 and 60 deg have more
+    assert best["goal"] == "highest savings, fewest unlit crossings (1; none has 0)"
+    assert best["setting"] == {"lamps.camera.tilt_deg": "40"}
+    assert best["savings"] == pytest.approx(0.55) and best["seeds"] == 2

@@ -189,10 +189,10 @@ def loopback_cluster(tmp_path):
     address = f"tcp://127.0.0.1:{port}"
     logs = [open(tmp_path / name, "w") for name in ("scheduler.log", "worker.log")]  # noqa: SIM115
     procs = [subprocess.Popen(_dask_cli("scheduler", "--host", "127.0.0.1", "--port", str(port),
-                                        "--no-dashboard"), stdout=logs[0], stderr=subprocess.STDOUT, cwd=REPO)]  # fmt: skip
+                                        "--no-dashboard", "--dashboard-address", "127.0.0.1:0"), stdout=logs[0], stderr=subprocess.STDOUT, cwd=REPO)]  # fmt: skip
     try:
         procs.append(subprocess.Popen(_dask_cli("worker", address, "--nthreads", "1", "--nworkers", "1",
-                                                "--host", "127.0.0.1", "--no-dashboard"),
+                                                "--host", "127.0.0.1", "--no-dashboard", "--dashboard-address", "127.0.0.1:0"),
                                       stdout=logs[1], stderr=subprocess.STDOUT, cwd=REPO))  # fmt: skip
         deadline = time.monotonic() + 60
         while True:
@@ -305,3 +305,35 @@ def test_point_ids_depend_on_values_and_seed_only():
     assert a != point_id({"lamps.camera.height_m": 4, "traffic_density": 1.5}, 2)
     assert a != point_id({"lamps.camera.height_m": 6, "traffic_density": 1.5}, 1)
     assert re.fullmatch(r"[0-9a-f]{12}", a)
+
+
+def test_results_file_drops_rows_cut_short_by_a_crash(tmp_path):
+    from citysim.sweep_results import ResultsFile
+
+    path = tmp_path / "results.csv"
+    table = ResultsFile(path, ["traffic_density"])
+    done = [{"point_id": "a", "traffic_density": 1, "seed": 1, "controller": c, "status": "ok",
+             "error": "", "energy_kwh": 0.25 + i} for i, c in enumerate(("always_on", "pir"))]  # fmt: skip
+    table.append(done)
+    half = {**done[0], "point_id": "b"}  # the crash came before the point's second row
+    table.append([half])
+    with open(path, "a") as f:
+        f.write("c,2,1,always_on,o")  # and a row cut in the middle of a cell
+    reopened = ResultsFile(path, ["traffic_density"])
+    assert reopened.finished_points(["always_on", "pir"]) == {"a": "ok"}
+    assert [r["energy_kwh"] for r in reopened.rows] == ["0.25", "1.25", "0.25"]
+    reopened.drop_points({"b"})
+    assert [r["point_id"] for r in read_rows(path)] == ["a", "a"]
+
+
+def test_bad_worker_count_and_unreachable_scheduler_are_user_errors(tmp_path, monkeypatch):
+    import citysim.sweep
+
+    sweep_file = write_sweep(tmp_path / "in", SWEEP_2X2)
+    with pytest.raises(SweepError, match="workers: a whole number >= 1, got 0"):
+        run_sweep(sweep_file, tmp_path / "a", workers=0, progress=False)
+    monkeypatch.setattr(citysim.sweep, "SCHEDULER_TIMEOUT_S", 1.0)
+    nobody = f"tcp://127.0.0.1:{_free_port()}"
+    with pytest.raises(SweepError, match=f"scheduler '{nobody}': cannot connect"):
+        run_sweep(sweep_file, tmp_path / "b", scheduler=nobody, progress=False)
+    assert not (tmp_path / "b" / "results.csv").exists()
