@@ -82,8 +82,11 @@ def cmd_render(args) -> int:
 def cmd_sweep(args) -> int:
     from citysim.sweep import run_sweep
 
-    out = run_sweep(args.sweep, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.no_progress)
-    print(f"results written to {args.out}/results.csv" if out is None else out)
+    counts = run_sweep(args.sweep, args.out, scheduler=args.scheduler, workers=args.workers,
+                       progress=not args.no_progress)
+    print(f"{counts['points']} points: {counts['ran']} ran ({counts['ok']} ok, {counts['failed']} failed), "
+          f"{counts['skipped']} already done")
+    print(f"results written to {counts['results']}; plots and report: citysim plot {args.out}")
     return 0
 
 

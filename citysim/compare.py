@@ -69,8 +69,12 @@ def run_comparison(
     out_dir: Path | None = None,
     workers: int = 1,
     scenario_file: str | None = None,
+    plots: bool = True,
 ) -> dict:
-    """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder."""
+    """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder.
+
+    ``plots=False`` skips the PNGs (a sweep point keeps only its figures and objects.csv).
+    """
     specs = resolve_controllers(scenario, controllers)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
@@ -109,7 +113,7 @@ def run_comparison(
         _merge_parts(parts, [s.display_name for s in specs], stage)
         shutil.rmtree(parts, ignore_errors=True)
         (stage / "summary.json").write_text(json.dumps(summary, indent=2))
-        if out_dir is not None:
+        if out_dir is not None and plots:
             from citysim.plots import plot_run
 
             plot_run(stage)
