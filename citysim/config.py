@@ -82,7 +82,7 @@ class SimulationSpec(Spec):
     """How hard the simulator looks: trade exactness for speed, never the traffic."""
 
     idle_frame_stride: int = Field(
-        default=10,
+        default=15,
         ge=1,
         le=30,
         description="an idle lamp camera (nobody in view, steady light, no motion in its last judged "
