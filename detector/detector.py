@@ -14,7 +14,9 @@ detector); frames with many regions take the vectorised paths. Both give the
 same detections (``tests/detector/test_detector.py`` checks this against the
 straightforward array computation).
 
-Regions touching the frame border are not classified (their shape is cut);
+Regions touching the frame border are not classified (their shape is cut)
+unless division cuts an object clear of the border off them (a car whose
+headlight beam on the road reaches the frame's edge);
 neither are regions with no ground point (bottom at or above the horizon) or
 farther than ``max_distance_m`` (the paper's range is 25 m). Boxes are OpenCV
 ``(x, y, w, h)`` pixels of the distorted frame; distances are forward ground
@@ -144,21 +146,28 @@ class Detector:
         self.last_regions = regions
         # a frame holds a handful of regions: per-region work is plain Python on lists
         # (numpy's per-call cost would exceed the arithmetic), arrays only where results go out
-        inner = (
-            [i for i, edge in enumerate(regions.touches_border.tolist()) if not edge]
-            if regions.contours
-            else regions.contours
-        )
-        if not inner:
+        if not regions.contours:
             self.tracker.update_rows([], [])
             return []
-        all_boxes, all_areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
-        boxes = [all_boxes[i] for i in inner]
-        areas = [all_areas[i] for i in inner]
+        boxes, areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
         rows = self._geometry.rows(boxes, areas)
-        divide_rows(
-            self._geometry, [regions.contours[i] for i in inner], boxes, areas, rows, self.division
+        divided, _ = divide_rows(
+            self._geometry, regions.contours, boxes, areas, rows, self.division
         )
+        # a region cut by the border is classified only as the object divided off it, when that
+        # object is clear of the border (the light spot was the part that reached it)
+        edge = regions.touches_border.tolist()
+        if any(edge):
+            width_px, height_px = self._frame_shape[1], self._frame_shape[0]
+            for i in divided:
+                x, y, w, h = boxes[i]
+                if edge[i] and x > 0 and y > 0 and x + w < width_px and y + h < height_px:
+                    edge[i] = False
+            if all(edge):
+                self.tracker.update_rows([], [])
+                return []
+            inner = [i for i, e in enumerate(edge) if not e]
+            boxes, rows = [boxes[i] for i in inner], [rows[i] for i in inner]
         max_distance_m = self.max_distance_m
         keep = [j for j, row in enumerate(rows) if row is not None and row[3] <= max_distance_m]
         if not keep:

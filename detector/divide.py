@@ -21,6 +21,15 @@ How a region is read (all in the region's own bounding box, pixels):
   side lies beside it, about as far away, so the feet are at the spot's widest
   row (an ellipse on the ground is widest at its centre); a spot ending above
   the body's bottom lies behind it and the feet are the bottom row.
+* A region whose top is a compact blob standing on a much wider flat part
+  (a car head-on on its own headlight beam, where the beam is both wider and,
+  near the camera, taller in pixels than the car) defeats the column test.
+  ``split_at_widening`` reads it from the row widths alone: top down, the
+  first row widening sharply past every row above it (``widen_start``), with
+  the rows below reaching ``widen_ratio`` times the blob's width and staying
+  that wide, marks the blob's base; the cut is at the narrowest row (the neck)
+  between the blob's widest row and that widening. It is tried only when the
+  column split fails or is rejected.
 * The division stands only if, measured in metres by ``region_features``, the
   spot part is flat (height / width below ``max_spot_height_to_width``) and the
   object part is more upright and more compact (higher extent) than the whole.
@@ -68,6 +77,16 @@ class DivisionParams:
     ``wide_row_factor``: a row is part of a spot in front when it is this much wider than the body.
     ``spot_row_fraction``: spot rows have side pixels at least this fraction of the widest side row.
     ``min_height_px``: shorter regions are not analysed (too few rows for the histograms).
+    ``widen_start``: in ``split_at_widening``, a row this much wider than every row above starts the spot.
+    ``widen_ratio``: ... and the spot's rows are at least this many times the blob's widest row.
+    ``min_top_rows``: ... the blob has at least this many rows (its roof rows widen fast too).
+    ``min_object_extent``: ... the blob fills at least this fraction of its box (it is compact).
+    ``max_beam_height_to_width``: ... the spot's estimated height / width (m) is at most this
+    (a beam reaching from the object's base to near the camera is long on the ground, and
+    read as upright at its near end it comes out taller than a spot beside a walker).
+    ``min_beam_object_height_to_width``: ... the blob's estimated height / width (m) is at least
+    this; it replaces "more upright than the whole", which a beam reaching near the camera
+    (estimated tall) defeats. A head-on car is ~0.8, a side-view car's cabin ~0.25.
     """
 
     max_extent: float = 0.6
@@ -80,6 +99,12 @@ class DivisionParams:
     wide_row_factor: float = 1.5
     spot_row_fraction: float = 0.25
     min_height_px: int = 16
+    widen_start: float = 1.25
+    widen_ratio: float = 2.0
+    min_top_rows: int = 4
+    min_object_extent: float = 0.5
+    max_beam_height_to_width: float = 1.0
+    min_beam_object_height_to_width: float = 0.4
 
     def __post_init__(self) -> None:
         for name in (
@@ -88,11 +113,18 @@ class DivisionParams:
             "max_side_height_fraction",
             "min_side_fraction",
             "spot_row_fraction",
+            "min_object_extent",
         ):
             value = getattr(self, name)
             if not 0.0 < value <= 1.0:
                 raise ValueError(f"DivisionParams.{name} must be in (0, 1], got {value!r}")
-        for name in ("max_area_m2", "max_spot_aspect", "max_spot_height_to_width"):
+        for name in (
+            "max_area_m2",
+            "max_spot_aspect",
+            "max_spot_height_to_width",
+            "max_beam_height_to_width",
+            "min_beam_object_height_to_width",
+        ):
             value = getattr(self, name)
             if not value > 0.0:
                 raise ValueError(f"DivisionParams.{name} must be > 0, got {value!r}")
@@ -100,6 +132,14 @@ class DivisionParams:
             raise ValueError(
                 f"DivisionParams.min_height_px must be an integer >= 6, got {self.min_height_px!r}"
             )
+        if not (isinstance(self.min_top_rows, int) and self.min_top_rows >= 2):
+            raise ValueError(
+                f"DivisionParams.min_top_rows must be an integer >= 2, got {self.min_top_rows!r}"
+            )
+        for name in ("widen_start", "widen_ratio"):
+            value = getattr(self, name)
+            if not value > 1.0:
+                raise ValueError(f"DivisionParams.{name} must be > 1, got {value!r}")
         if not self.wide_row_factor > 1.0:
             raise ValueError(
                 f"DivisionParams.wide_row_factor must be > 1, got {self.wide_row_factor!r}"
@@ -206,6 +246,68 @@ def split_object_and_spot(
     return body, spot
 
 
+def split_at_widening(
+    roi: np.ndarray, params: DivisionParams = DivisionParams()
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Split a compact blob from the much wider flat part it stands on: (object, spot) masks, or None.
+
+    ``roi`` is one region's filled mask (h, w), row 0 at the top. Pixel-only
+    test on the row widths (the horizontal histogram); the metric criteria are
+    applied by ``divide_rows``.
+    """
+    occ = roi if roi.dtype == bool else roi > 0
+    h, w = occ.shape
+    start = params.min_top_rows
+    if h < 2 * start or w < 6:
+        return None
+    row_w = _count(occ, axis=1)
+    widest_above = max(row_w[:start])
+    cut = None
+    # the beam fans out over some rows: look ahead for the rows to reach widen_ratio times the
+    # blob, then cut at the first row clearly wider than the blob
+    for r in range(start, h - start):
+        if max(row_w[r : r + max(3, r // 2)]) >= params.widen_ratio * widest_above:
+            cut = next(
+                (c for c in range(r, h) if row_w[c] > params.widen_start * widest_above), None
+            )
+            break
+        widest_above = max(widest_above, row_w[r])
+    if cut is None:
+        return None
+    # a spot in front fans out from the blob's base to many times its width, and its rows
+    # stay wider than the blob; an arm or a bag at mid height has the narrow body below again
+    below = sorted(row_w[cut:])
+    if (
+        below[-1] < params.widen_ratio * widest_above
+        or below[len(below) // 2] < params.widen_start * widest_above
+    ):
+        return None
+    top = row_w[:cut]
+    peak = top.index(widest_above)
+    neck_w = min(top[peak:])
+    # the last of equally narrow rows: the blob's base is just above the spot
+    neck = cut - 1 - top[::-1].index(neck_w)
+    if neck + 1 < start:
+        return None
+    body = occ.copy()
+    body[neck + 1 :] = False
+    cols = np.flatnonzero(np.add.reduce(body[: neck + 1], axis=0, dtype=np.int32))
+    if len(cols) == 0:
+        return None
+    if sum(top[: neck + 1]) < params.min_object_extent * (neck + 1) * (cols[-1] - cols[0] + 1):
+        return None
+    return body, occ & ~body
+
+
+# tried in this order on a candidate region; the first split that passes the metric criteria stands
+# with the names of the DivisionParams fields bounding the spot's height / width (m) and the
+# object's height / width (m; None: the object must be more upright than the whole region)
+SPLITTERS = (
+    (split_object_and_spot, "max_spot_height_to_width", None),
+    (split_at_widening, "max_beam_height_to_width", "min_beam_object_height_to_width"),
+)
+
+
 def _part_box_and_area(part: np.ndarray, x0: int, y0: int) -> tuple[list[int], float] | None:
     """Frame box [x, y, w, h] and Green's-theorem area of a part mask cut from a box at (x0, y0)."""
     contours, _ = cv2.findContours(part.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
@@ -225,6 +327,45 @@ def _ratio(num: float, den: float) -> float:
     if den:
         return num / den
     return math.copysign(math.inf, num) if num else math.nan
+
+
+def _accept(
+    geometry: RegionGeometry,
+    parts: tuple[np.ndarray, np.ndarray] | None,
+    x: int,
+    y: int,
+    extent: float,
+    row: list[float],
+    max_spot_height_to_width: float,
+    min_object_height_to_width: float | None,
+) -> tuple[tuple[list[int], float], list[int], list[float]] | None:
+    """(object box and area, spot box, object feature row) if a split meets the metric criteria.
+
+    The object must be more upright than the whole region, or, if ``min_object_height_to_width``
+    is given, at least that upright.
+    """
+    if parts is None:
+        return None
+    body = _part_box_and_area(parts[0], x, y)
+    spot = _part_box_and_area(parts[1], x, y)
+    if body is None or spot is None:
+        return None
+    body_row, spot_row = geometry.rows([body[0], spot[0]], [body[1], spot[1]])
+    if body_row is None or spot_row is None:
+        return None
+    body_extent = body[1] / max(body[0][2] * body[0][3], 1)
+    if (
+        spot_row[1] > max_spot_height_to_width * spot_row[0]
+        or body_extent <= extent
+        or _ratio(body_row[1], body_row[0])
+        <= (
+            _ratio(row[1], row[0])
+            if min_object_height_to_width is None
+            else min_object_height_to_width
+        )
+    ):
+        return None
+    return body, spot[0], body_row
 
 
 def divide_rows(
@@ -255,26 +396,21 @@ def divide_rows(
             continue
         roi = np.zeros((h, w), np.uint8)
         cv2.drawContours(roi, contours, i, 1, thickness=cv2.FILLED, offset=(-x, -y))
-        parts = split_object_and_spot(roi.view(bool), params)
-        if parts is None:
+        accepted = None
+        for splitter, flat_field, upright_field in SPLITTERS:
+            parts = splitter(roi.view(bool), params)
+            min_upright = None if upright_field is None else getattr(params, upright_field)
+            accepted = _accept(
+                geometry, parts, x, y, extent, row, getattr(params, flat_field), min_upright
+            )
+            if accepted is not None:
+                break
+        if accepted is None:
             continue
-        body = _part_box_and_area(parts[0], x, y)
-        spot = _part_box_and_area(parts[1], x, y)
-        if body is None or spot is None:
-            continue
-        body_row, spot_row = geometry.rows([body[0], spot[0]], [body[1], spot[1]])
-        if body_row is None or spot_row is None:
-            continue
-        body_extent = body[1] / max(body[0][2] * body[0][3], 1)
-        if (
-            spot_row[1] > params.max_spot_height_to_width * spot_row[0]
-            or body_extent <= extent
-            or _ratio(body_row[1], body_row[0]) <= _ratio(row[1], row[0])
-        ):
-            continue
+        body, spot, body_row = accepted
         boxes_px[i], areas_px[i], rows[i] = body[0], body[1], body_row
         divided.append(i)
-        spots.append(spot[0])
+        spots.append(spot)
     return divided, spots
 
 
