@@ -226,11 +226,16 @@ def test_is_target_uses_the_threshold(model):
 def reference_process(camera, model, segmenter, tracker, frame, max_distance_m=25.0):
     """The detector's steps done the straightforward way: whole arrays, scikit-learn's predict_proba."""
     regions = segmenter.apply(frame)
-    inner = np.flatnonzero(~regions.touches_border)
-    boxes, areas = regions.boxes_px[inner], regions.areas_px[inner]
+    boxes, areas = regions.boxes_px, regions.areas_px
     feats, valid = region_features(camera, boxes, areas)
-    parts = divide_regions(camera, [regions.contours[i] for i in inner], boxes, areas, feats, valid)
-    keep = parts.valid & (parts.features[:, 3] <= max_distance_m)
+    parts = divide_regions(camera, regions.contours, boxes, areas, feats, valid)
+    # a border region counts only as an object divided off it clear of the border
+    ob = parts.boxes_px
+    clear = np.all(
+        (ob[:, :2] > 0) & (ob[:, :2] + ob[:, 2:] < (camera.width_px, camera.height_px)), axis=1
+    )
+    inner = ~regions.touches_border | (parts.divided & clear)
+    keep = inner & parts.valid & (parts.features[:, 3] <= max_distance_m)
     feats, boxes = parts.features[keep], parts.boxes_px[keep]
     proba = model.predict_proba(feats) if len(feats) else np.zeros((0, len(CLASSES)))
     p_target = 1.0 - proba[:, CLASSES.index("noise")]
