@@ -99,7 +99,12 @@ class Controller:
         pass
 
     def motion_seen(self, lamp_index: int) -> bool:
-        """Did this lamp's last judged frame hold any moving region? (keeps its camera at full rate)"""
+        """Does this lamp's camera need every frame now? (see ``citysim.sim.CameraSchedule``)
+
+        True while its last judged frame held a moving region, and while its background model is
+        young: MOG2 learns at 1 / (2 x frames seen) until ``history``, so a model fed one frame a
+        second would absorb a car coming head-on within a few frames.
+        """
         return False
 
 
@@ -188,6 +193,11 @@ class PassiveInfrared(Controller):
             self.bank.trigger(int(lamp_index), t_s)
 
 
+#: Frames a fresh background model is fed at the full frame rate before its camera may idle
+#: (MOG2's learning rate is then 1/300 and falling to its steady 1/history).
+WARMUP_FRAMES = 150
+
+
 class ForegroundThreshold(Controller):
     """The paper's naive baseline: light when a foreground contour exceeds a fraction of the frame.
 
@@ -205,9 +215,10 @@ class ForegroundThreshold(Controller):
         self.segmenters = [Segmenter(SegmenterParams()) for _ in ctx.lamps]
         self.light = LightChangeWatch(ctx)
         self.last_counts = [0] * len(ctx.lamps)
+        self.frames_since_reset = [0] * len(ctx.lamps)
 
     def motion_seen(self, lamp_index):
-        return self.last_counts[lamp_index] > 0
+        return self.last_counts[lamp_index] > 0 or self.frames_since_reset[lamp_index] < WARMUP_FRAMES
 
     def on_frame(self, lamp_index, t_s, image):
         seg = self.segmenters[lamp_index]
@@ -216,6 +227,8 @@ class ForegroundThreshold(Controller):
             return None
         if light == "settled":
             seg.reset()
+            self.frames_since_reset[lamp_index] = 0
+        self.frames_since_reset[lamp_index] += 1
         regions = seg.apply(image)
         self.last_counts[lamp_index] = len(regions)
         n_px = image.shape[0] * image.shape[1]
@@ -274,9 +287,11 @@ class DetectorPerFrame(Controller):
         threshold = 0.5 if ctx.spec.target_threshold is None else ctx.spec.target_threshold
         self.detectors = [Detector(site.camera, model=model, target_threshold=threshold) for site in ctx.street.lamps]
         self.light = LightChangeWatch(ctx)
+        self.frames_since_reset = [0] * len(ctx.lamps)
 
     def motion_seen(self, lamp_index):
-        return len(self.detectors[lamp_index].last_regions) > 0
+        young = self.frames_since_reset[lamp_index] < WARMUP_FRAMES
+        return young or len(self.detectors[lamp_index].last_regions) > 0
 
     def detect(self, lamp_index, t_s, image) -> list | None:
         """The detector's detections, or None while the light in view is changing (not judged)."""
@@ -286,6 +301,8 @@ class DetectorPerFrame(Controller):
             return None
         if light == "settled":
             det.reset_background()
+            self.frames_since_reset[lamp_index] = 0
+        self.frames_since_reset[lamp_index] += 1
         return det.process(image)
 
     def on_frame(self, lamp_index, t_s, image):
