@@ -22,7 +22,9 @@ import numpy as np
 cv2.setNumThreads(1)  # the paper's implementation is single-threaded, and so is a lamp's budget
 
 
-def synthetic_sequence(width_px: int, height_px: int, n_frames: int = 300, n_objects: int = 5, seed: int = 0) -> list[np.ndarray]:
+def synthetic_sequence(
+    width_px: int, height_px: int, n_frames: int = 300, n_objects: int = 5, seed: int = 0
+) -> list[np.ndarray]:
     """Dark noisy frames with bright upright blobs moving across at different depths."""
     rng = np.random.default_rng(seed)
     base = rng.normal(35, 6, (height_px, width_px)).clip(0, 255).astype(np.uint8)
@@ -48,10 +50,24 @@ def paper_camera(width_px: int, height_px: int):
     from detector.camera import CameraModel
 
     if width_px == 320:
-        return CameraModel(height_m=3.1, tilt_deg=22, focal_mm=0.73, sensor_w_mm=0.7, sensor_h_mm=0.52,
-                           width_px=width_px, height_px=height_px)
-    return CameraModel(height_m=3.0, tilt_deg=13, focal_mm=3.67, sensor_w_mm=4.8, sensor_h_mm=3.6,
-                       width_px=width_px, height_px=height_px)
+        return CameraModel(
+            height_m=3.1,
+            tilt_deg=22,
+            focal_mm=0.73,
+            sensor_w_mm=0.7,
+            sensor_h_mm=0.52,
+            width_px=width_px,
+            height_px=height_px,
+        )
+    return CameraModel(
+        height_m=3.0,
+        tilt_deg=13,
+        focal_mm=3.67,
+        sensor_w_mm=4.8,
+        sensor_h_mm=3.6,
+        width_px=width_px,
+        height_px=height_px,
+    )
 
 
 class OpenCVFloor:
@@ -59,7 +75,9 @@ class OpenCVFloor:
 
     def __init__(self):
         self.clahe = cv2.createCLAHE(clipLimit=3.0, tileGridSize=(8, 8))
-        self.mog2 = cv2.createBackgroundSubtractorMOG2(history=500, varThreshold=16, detectShadows=True)
+        self.mog2 = cv2.createBackgroundSubtractorMOG2(
+            history=500, varThreshold=16, detectShadows=True
+        )
         self.kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3))
 
     def process(self, frame: np.ndarray) -> None:
@@ -107,10 +125,14 @@ def bench_detector() -> dict:
         ms = interleaved_cpu_ms(frames, {"detector": det.process, "floor": floor.process})
         mem = peak_memory_mb(Detector(paper_camera(w, h), model=model).process, frames[:100])
         ratio = ms["floor"] / ms["detector"]
-        out[f"{w}x{h}"] = dict(detector_ms=ms["detector"], floor_ms=ms["floor"], fps_ratio=ratio, peak_mb=mem)
-        print(f"{w}x{h}: detector {1000 / ms['detector']:7.1f} frames/s ({ms['detector']:.2f} ms)   OpenCV floor "
-              f"{1000 / ms['floor']:7.1f} frames/s ({ms['floor']:.2f} ms)   detector/floor fps ratio {ratio:.2f}   "
-              f"peak Python heap {mem:.2f} MB")
+        out[f"{w}x{h}"] = dict(
+            detector_ms=ms["detector"], floor_ms=ms["floor"], fps_ratio=ratio, peak_mb=mem
+        )
+        print(
+            f"{w}x{h}: detector {1000 / ms['detector']:7.1f} frames/s ({ms['detector']:.2f} ms)   OpenCV floor "
+            f"{1000 / ms['floor']:7.1f} frames/s ({ms['floor']:.2f} ms)   detector/floor fps ratio {ratio:.2f}   "
+            f"peak Python heap {mem:.2f} MB"
+        )
     return out
 
 
@@ -142,8 +164,10 @@ def bench_render() -> dict:
                 render_s += t1 - t0
                 detect_s += t2 - t1
         out[n] = dict(render_ms=1000 * render_s / frames, detect_ms=1000 * detect_s / frames)
-        print(f"{n:2d} agents: render {out[n]['render_ms']:.2f} ms   detect {out[n]['detect_ms']:.2f} ms   "
-              f"render/detect {out[n]['render_ms'] / out[n]['detect_ms']:.2f}")
+        print(
+            f"{n:2d} agents: render {out[n]['render_ms']:.2f} ms   detect {out[n]['detect_ms']:.2f} ms   "
+            f"render/detect {out[n]['render_ms'] / out[n]['detect_ms']:.2f}"
+        )
     return out
 
 
@@ -160,7 +184,9 @@ print(json.dumps({"wall_s": wall_s, "max_rss_mb": resource.getrusage(resource.RU
 """
 
 
-def bench_sim(scenario_path: str = "scenarios/suburban_night.yaml", durations_s=(60.0, 180.0)) -> dict:
+def bench_sim(
+    scenario_path: str = "scenarios/suburban_night.yaml", durations_s=(60.0, 180.0)
+) -> dict:
     """Simulated seconds per wall second per controller, and peak memory at two run lengths (flat = streaming)."""
     import json
     import subprocess
@@ -172,12 +198,19 @@ def bench_sim(scenario_path: str = "scenarios/suburban_night.yaml", durations_s=
     for name in CONTROLLERS:
         figures = []
         for duration_s in durations_s:
-            res = subprocess.run([sys.executable, "-c", _SIM_CHILD, scenario_path, name, str(duration_s)],
-                                 capture_output=True, text=True, check=True)
+            res = subprocess.run(
+                [sys.executable, "-c", _SIM_CHILD, scenario_path, name, str(duration_s)],
+                capture_output=True,
+                text=True,
+                check=True,
+            )
             figures.append(json.loads(res.stdout.strip().splitlines()[-1]))
         speed = durations_s[-1] / figures[-1]["wall_s"]
         out[name] = dict(sim_s_per_wall_s=speed, max_rss_mb=[f["max_rss_mb"] for f in figures])
-        rss = "  ".join(f"{d:.0f} s: {f['max_rss_mb']:.0f} MB" for d, f in zip(durations_s, figures, strict=True))
+        rss = "  ".join(
+            f"{d:.0f} s: {f['max_rss_mb']:.0f} MB"
+            for d, f in zip(durations_s, figures, strict=True)
+        )
         print(f"{name:<20} {speed:8.1f} sim s / wall s    peak RSS {rss}")
     return out
 
