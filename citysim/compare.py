@@ -26,6 +26,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from citysim.config import ControllerSpec, Scenario
+from citysim.control import CONTROLLERS
 from citysim.sim import (
     LAMPS_CSV_HEADER,
     OBJECTS_CSV_HEADER,
@@ -93,7 +94,9 @@ def run_comparison(
                 q = manager.Queue()
                 ctx = mp.get_context("spawn")  # fresh interpreters: no forked OpenCV/pymunk state
                 with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-                    futures = [pool.submit(_worker, (scenario, spec, str(parts), q)) for spec in specs]
+                    # camera controllers first: the cheap ones fill the gaps at the end
+                    heavy_first = sorted(specs, key=lambda s: not CONTROLLERS[s.name].uses_camera)
+                    futures = [pool.submit(_worker, (scenario, spec, str(parts), q)) for spec in heavy_first]
                     pending = set(futures)
                     while pending:
                         try:

@@ -101,9 +101,7 @@ class Controller:
     def motion_seen(self, lamp_index: int) -> bool:
         """Does this lamp's camera need every frame now? (see ``citysim.sim.CameraSchedule``)
 
-        True while its last judged frame held a moving region, and while its background model is
-        young: MOG2 learns at 1 / (2 x frames seen) until ``history``, so a model fed one frame a
-        second would absorb a car coming head-on within a few frames.
+        True while its last judged frame held a moving region.
         """
         return False
 
@@ -193,9 +191,24 @@ class PassiveInfrared(Controller):
             self.bank.trigger(int(lamp_index), t_s)
 
 
-#: Frames a fresh background model is fed at the full frame rate before its camera may idle
-#: (MOG2's learning rate is then 1/300 and falling to its steady 1/history).
-WARMUP_FRAMES = 150
+class BackgroundClock:
+    """Frames each lamp camera has *taken* since its background model was (re)built.
+
+    The simulator judges an idle camera only now and then (``citysim.sim.CameraSchedule``), but
+    the camera takes every frame. MOG2's automatic learning rate, 1 / min(2 n, history), counts
+    frames fed; fed one frame a second, a young model would learn 15 times too fast and swallow a
+    car coming head-on. So each judged frame is fed at the rate of the frames taken.
+    """
+
+    def __init__(self, n_lamps: int, fps: float):
+        self.fps = fps
+        self.reset_at_s = [0.0] * n_lamps
+
+    def reset(self, lamp_index: int, t_s: float) -> None:
+        self.reset_at_s[lamp_index] = t_s
+
+    def frames_taken(self, lamp_index: int, t_s: float) -> int:
+        return int(round((t_s - self.reset_at_s[lamp_index]) * self.fps))
 
 
 class ForegroundThreshold(Controller):
@@ -215,10 +228,10 @@ class ForegroundThreshold(Controller):
         self.segmenters = [Segmenter(SegmenterParams()) for _ in ctx.lamps]
         self.light = LightChangeWatch(ctx)
         self.last_counts = [0] * len(ctx.lamps)
-        self.frames_since_reset = [0] * len(ctx.lamps)
+        self.clock = BackgroundClock(len(ctx.lamps), 1.0 / ctx.frame_period_s)
 
     def motion_seen(self, lamp_index):
-        return self.last_counts[lamp_index] > 0 or self.frames_since_reset[lamp_index] < WARMUP_FRAMES
+        return self.last_counts[lamp_index] > 0
 
     def on_frame(self, lamp_index, t_s, image):
         seg = self.segmenters[lamp_index]
@@ -227,9 +240,9 @@ class ForegroundThreshold(Controller):
             return None
         if light == "settled":
             seg.reset()
-            self.frames_since_reset[lamp_index] = 0
-        self.frames_since_reset[lamp_index] += 1
-        regions = seg.apply(image)
+            self.clock.reset(lamp_index, t_s)
+        rate = seg.automatic_learning_rate(self.clock.frames_taken(lamp_index, t_s))
+        regions = seg.apply(image, rate)
         self.last_counts[lamp_index] = len(regions)
         n_px = image.shape[0] * image.shape[1]
         if len(regions.areas_px) and regions.areas_px.max() > self.fraction * n_px:
@@ -287,11 +300,10 @@ class DetectorPerFrame(Controller):
         threshold = 0.5 if ctx.spec.target_threshold is None else ctx.spec.target_threshold
         self.detectors = [Detector(site.camera, model=model, target_threshold=threshold) for site in ctx.street.lamps]
         self.light = LightChangeWatch(ctx)
-        self.frames_since_reset = [0] * len(ctx.lamps)
+        self.clock = BackgroundClock(len(ctx.lamps), 1.0 / ctx.frame_period_s)
 
     def motion_seen(self, lamp_index):
-        young = self.frames_since_reset[lamp_index] < WARMUP_FRAMES
-        return young or len(self.detectors[lamp_index].last_regions) > 0
+        return len(self.detectors[lamp_index].last_regions) > 0
 
     def detect(self, lamp_index, t_s, image) -> list | None:
         """The detector's detections, or None while the light in view is changing (not judged)."""
@@ -301,9 +313,9 @@ class DetectorPerFrame(Controller):
             return None
         if light == "settled":
             det.reset_background()
-            self.frames_since_reset[lamp_index] = 0
-        self.frames_since_reset[lamp_index] += 1
-        return det.process(image)
+            self.clock.reset(lamp_index, t_s)
+        rate = det.segmenter.automatic_learning_rate(self.clock.frames_taken(lamp_index, t_s))
+        return det.process(image, rate)
 
     def on_frame(self, lamp_index, t_s, image):
         detections = self.detect(lamp_index, t_s, image)

@@ -110,10 +110,9 @@ class CameraSchedule:
     A camera is *busy* when an agent stands in its view (projected inside the frame, with a margin
     for what is about to enter), when the light in its view is changing, or when its last judged
     frame held a moving region (an insect, a swaying branch, an animal: it stays at full rate while
-    that lasts), or when its background model is young (``control.WARMUP_FRAMES`` after a start or
-    a rebuild: a model fed one frame a second learns fast enough to swallow a car coming head-on,
-    which a real camera judging every frame never does). An idle camera looks at a static scene; it is judged every ``idle_stride``-th frame,
-    which keeps its background model fed and samples the noise that would wake it. With
+    that lasts). An idle camera looks at a static scene; it is judged every ``idle_stride``-th frame,
+    which keeps its background model fed (at the learning rate of every frame taken, see
+    ``control.BackgroundClock``) and samples the noise that would wake it. With
     ``idle_stride`` 1 every frame of every camera is judged (exact, and slow).
     """
 

@@ -126,8 +126,12 @@ class Detector:
         with sklearn.config_context(assume_finite=True):
             return self.model.predict_proba(feats)
 
-    def process(self, gray: np.ndarray) -> list[Detection]:
-        """Detect and classify the moving objects of one uint8 (H, W) frame."""
+    def process(self, gray: np.ndarray, learning_rate: float | None = None) -> list[Detection]:
+        """Detect and classify the moving objects of one uint8 (H, W) frame.
+
+        ``learning_rate``: the background model's rate for this frame (default: MOG2's automatic
+        rate); see ``Segmenter.apply``.
+        """
         if (
             not isinstance(gray, np.ndarray)
             or gray.shape != self._frame_shape
@@ -142,7 +146,7 @@ class Detector:
                 f"Detector.process needs a grayscale uint8 frame of shape {self._frame_shape} (the "
                 f"camera's height_px x width_px), got {got}"
             )
-        regions = self.segmenter.apply(gray)
+        regions = self.segmenter.apply(gray, learning_rate)
         self.last_regions = regions
         # a frame holds a handful of regions: per-region work is plain Python on lists
         # (numpy's per-call cost would exceed the arithmetic), arrays only where results go out

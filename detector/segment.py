@@ -157,6 +157,14 @@ class Segmenter:
         self._mog2: cv2.BackgroundSubtractorMOG2
         self.reset()
 
+    def automatic_learning_rate(self, frames_before: int) -> float:
+        """The rate MOG2 picks itself for a frame with ``frames_before`` frames before it since the
+        last reset: 1 (the first frame becomes the background), then 1 / min(2 n, history) with n
+        counting this frame."""
+        if frames_before <= 0:
+            return 1.0
+        return 1.0 / min(2 * (frames_before + 1), self.params.mog2_history)
+
     def reset(self) -> None:
         """Forget the background: the next frame becomes the new background.
 
@@ -171,8 +179,12 @@ class Segmenter:
             detectShadows=p.detect_shadows,
         )
 
-    def apply(self, gray: np.ndarray) -> Regions:
-        """Segment one uint8 (H, W) frame and update the background model."""
+    def apply(self, gray: np.ndarray, learning_rate: float | None = None) -> Regions:
+        """Segment one uint8 (H, W) frame and update the background model.
+
+        ``learning_rate`` overrides the parameters' for this frame: a caller that judges only
+        some of a camera's frames passes the rate the model would have had on every frame.
+        """
         if not isinstance(gray, np.ndarray) or gray.dtype != np.uint8 or gray.ndim != 2:
             got = (
                 f"{gray.dtype} array of shape {gray.shape}"
@@ -182,7 +194,8 @@ class Segmenter:
             raise ValueError(f"Segmenter.apply needs a grayscale uint8 (H, W) frame, got {got}")
         p = self.params
         equalised = self._clahe.apply(gray)
-        fg = self._mog2.apply(equalised, learningRate=p.learning_rate)
+        rate = p.learning_rate if learning_rate is None else learning_rate
+        fg = self._mog2.apply(equalised, learningRate=rate)
         # shadows are written as 127; the cut turns them (and nothing brighter) into background
         cv2.threshold(fg, p.shadow_cut, 255, cv2.THRESH_BINARY, dst=fg)
         cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._kernel, dst=fg)

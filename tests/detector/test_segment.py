@@ -357,3 +357,20 @@ def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
         np.testing.assert_array_equal(a.touches_border, b.touches_border)
         assert a.boxes_px.dtype == b.boxes_px.dtype == np.int32 and a.touches_border.any()
         assert [len(c) for c in a.contours] == [len(c) for c in b.contours]
+
+
+def test_explicit_automatic_learning_rate_is_mog2s_own():
+    """A caller judging only some frames passes the rate of the frames taken; on every frame it
+    must be exactly what MOG2 picks by itself."""
+    rng = np.random.default_rng(5)
+    frames = []
+    for k in range(40):
+        img = np.clip(rng.normal(50, 4, (120, 160)), 0, 255).astype(np.uint8)
+        cv2.rectangle(img, (10 + 3 * k, 40), (22 + 3 * k, 80), 200, -1)
+        frames.append(img)
+    own, explicit = Segmenter(), Segmenter()
+    for k, frame in enumerate(frames):
+        a = own.apply(frame).mask
+        b = explicit.apply(frame, explicit.automatic_learning_rate(k)).mask
+        assert np.array_equal(a, b), k
+    assert explicit.automatic_learning_rate(1000) == 1.0 / explicit.params.mog2_history
