@@ -9,12 +9,17 @@ linear radiance (``render_light``):
 
 1. the cached static background re-lit by the lamps that are on, swaying
    crowns composited (``render_background``);
-2. headlight and flashlight spots on the ground (``render_beams``);
+2. headlight and flashlight spots on the ground (``render_spots``);
 3. agents far to near, motion-blurred, hidden behind nearer standing things
-   (``render_agents``);
+   (``render_agents``, ``render_clusters``);
 4. glare blobs of carried lights and lamp heads, rain, insects (``render_beams``,
    ``render_effects``);
 5. camera response to 8 bits, lens distortion by one remap, sensor noise.
+
+Rendering a frame must cost less than detecting it. Step 5 is cached for the
+still view and redone only in the canvas boxes steps 1-4 drew on
+(``render_output``); the agents of a frame are posed, projected and shaded
+together, and drawn in clusters that share one smear.
 
 Ground truth: boxes are OpenCV ``boundingRect`` boxes (x, y, w, h) of the
 agent's *visible* rendered pixels in the output frame (with blur, the pixels
@@ -44,7 +49,7 @@ from citysim.render_beams import (
 )
 from citysim.render_canvas import build_canvas
 from citysim.render_effects import Insects, SensorNoise, draw_rain
-from citysim.render_models import AGENT_MODELS
+from citysim.render_models import AGENT_MODELS, prepare_models
 from citysim.render_output import FrameOutput
 from citysim.render_spots import add_ground_spots, spot_reach
 from citysim.street import Street
@@ -149,6 +154,7 @@ class CameraRenderer:
         self._heads_in_view = self.canvas.spheres_in_view(
             self.lamp_positions_m, np.full(len(self.lamp_positions_m), 1.0)
         )
+        prepare_models()
         self.painter = AgentPainter(self.canvas, params.exposure_ms, params.motion_blur)
         self.output = FrameOutput(self.canvas)
         self.noise = (
@@ -219,9 +225,7 @@ class CameraRenderer:
 
         spot_gain = 1.0 - p.ambient_light
         if spot_gain > 0.0 and lit:
-            box = add_ground_spots(self.scene, img, lit, spot_gain)
-            if box is not None:
-                boxes.append(box)
+            boxes += add_ground_spots(self.scene, img, lit, spot_gain)
 
         on = levels > 0.0
         lighting = AgentLighting.of(

@@ -1,25 +1,27 @@
 """Moving agents on the canvas: articulated shapes, IR shading, motion blur, occlusion.
 
 Each ``AgentState`` becomes the detector's own 3D model (``citysim.render_models``,
-the shapes the classifier is trained on), posed for all agents at once.
-Agents are drawn far to near; each one on its own small layer (its bounding
-box on the canvas):
+the shapes the classifier is trained on). Python call overhead, not pixels,
+is what agents cost, so everything that can is done for all agents of a
+frame at once:
 
-1. every part's vertices are projected (clipped at the near plane when a part
-   reaches behind the camera) and the convex hull filled with
-   ``cv2.fillConvexPoly`` in 1/16-pixel fixed point, far parts first, writing
-   the part's index; a lookup turns indices into radiance;
-2. motion blur: the layer (radiance and coverage) is smeared along the
-   agent's image motion over the exposure, from its image at time t back to
-   its image at t - exposure (a line kernel, ``cv2.filter2D``);
-3. pixels where a standing static surface (or a swaying crown) is nearer than
-   the agent are cut away; the layer is composited over the frame and its
-   covered pixels (coverage > 1/2) are labelled with the agent's number for the
-   ground truth.
+1. one rotation per agent takes every model's vertices, part centres and
+   face normals to the camera frame; all vertices are projected together;
+   each part's outline - its image's convex polygon - is read from the
+   model's cached table by which faces look at the camera
+   (``citysim.render_outline``), no hull per part and frame;
+2. part radiance for all parts at once (emitter light falling with the
+   square of the distance, daylight, the lamps' light at the part; see
+   ``citysim.render_light``);
+3. agents are drawn far to near into one buffer of part *ranks*
+   (``cv2.fillConvexPoly`` in 1/16-pixel fixed point, far parts first, one
+   rank per part, 255 parts per batch), so nearer parts win each pixel; each
+   agent's silhouette is counted as it is drawn, before nearer ones cover it;
+4. agents close together with alike image motion form a cluster, which is
+   cut where standing surfaces are nearer, smeared, composited and labelled
+   for the ground truth in one go (``citysim.render_clusters``).
 
-Part radiance is uniform per part: emitter light falling with the square of
-the part's distance, daylight, and the lamps' light at the part (see
-``citysim.render_light``).
+Agents straddling the camera's near plane are clipped part by part (rare).
 
 Conventions: canvas pixels of ``citysim.render_canvas``; world frame of
 DESIGN.md; ``heading_rad`` CCW from +x; radiance in linear full-scale units.
@@ -37,14 +39,9 @@ import numpy as np
 
 from citysim import render_light as light
 from citysim.agents import AgentState
-from citysim.render_blur import (
-    MIN_BLUR_PX,
-    _smear,
-    similar_motion,
-    smear_stacked,
-    stacked_layers,
-)
+from citysim.render_blur import MIN_BLUR_PX, _smear
 from citysim.render_canvas import Z_NEAR_M, BoxMinimum, Canvas, clip_solid_near
+from citysim.render_clusters import PaintFrame, clusters, composite
 from citysim.render_models import draw_models
 from citysim.render_outline import outline_mask_bits, outline_tables
 from detector.shape_parts import VERTICES_PER_PART
@@ -126,6 +123,8 @@ class AgentPainter:
         # part ranks of the batch being drawn (0 = no part); cleared box by box after use
         self._ranks = np.zeros(canvas.shape, np.uint8)
         cam = canvas.camera
+        self._rot = cam.rotation_world_to_cam
+        self._pole = cam.position_m
         self._focal = np.array([cam.fx_px, cam.fy_px])
         self._centre = np.array([cam.cx_px - canvas.x0_px, cam.cy_px - canvas.y0_px])
 
@@ -149,48 +148,50 @@ class AgentPainter:
             return [], boxes
         n = len(agents)
         models = draw_models(agents)
-        n_parts_l = [m.n_parts for m in models]
-        starts_l = [0, *itertools.accumulate(n_parts_l)]
-        starts = np.array(starts_l)
-        owner = np.repeat(np.arange(n), n_parts_l)
-        pose = np.array(
-            [(a.x_m, a.y_m, 0.0, a.heading_rad, a.height_m, a.speed_mps) for a in agents]
-        )
-        heading, height, speed = pose[:, 3], pose[:, 4], pose[:, 5]
-        # one rotation per agent takes its model (vertices, centres, face normals) to the
-        # camera frame
-        c, s = np.cos(heading), np.sin(heading)
-        turn = np.zeros((n, 3, 3))
-        turn[:, 0, 0] = turn[:, 1, 1] = c
-        turn[:, 0, 1], turn[:, 1, 0] = -s, s
-        turn[:, 2, 2] = 1.0
+        n_parts = [m.n_parts for m in models]
+        starts = [0, *itertools.accumulate(n_parts)]
+        owner = np.repeat(np.arange(n), n_parts)
+        pose = np.array([(a.x_m, a.y_m, a.heading_rad, a.height_m, a.speed_mps) for a in agents])
         cam = self.canvas.camera
-        rot = cam.rotation_world_to_cam
-        to_cam = rot @ turn  # (n, 3, 3)
-        shift = (pose[:, :3] - cam.position_m) @ rot.T  # each agent's origin, camera frame
+        rot = self._rot
+        # each agent's model frame -> camera frame: rotation to_cam (heading, then the
+        # camera's rotation) and the model origin's camera-frame position shift
+        c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+        to_cam = np.empty((n, 3, 3))
+        to_cam[:, :, 0] = c[:, None] * rot[:, 0] + s[:, None] * rot[:, 1]
+        to_cam[:, :, 1] = c[:, None] * rot[:, 1] - s[:, None] * rot[:, 0]
+        to_cam[:, :, 2] = rot[:, 2]
+        shift = (pose[:, :2] - self._pole[:2]) @ rot[:, :2].T - self._pole[2] * rot[:, 2]
         geometry = np.matmul(
             np.concatenate([m.geometry for m in models]), to_cam[owner].transpose(0, 2, 1)
         )
         k = VERTICES_PER_PART
         part_shift = shift[owner]
-        cam_pts = geometry[:, :k] + part_shift[:, None, :]  # (sum P, K, 3)
-        cam_centres = geometry[:, k] + part_shift
-        z = cam_pts[..., 2]
-        z_part = z.min(axis=1)
+        geometry[:, : k + 1] += part_shift[:, None, :]  # vertices and centre; not the normals
+        cam_pts = geometry[:, :k]
+        cam_centres = geometry[:, k]
+        z_part = cam_pts[..., 2].min(axis=1)
         if z_part.min() >= Z_NEAR_M:  # the common case: every vertex in front of the camera
-            in_front = np.ones(n, dtype=bool)
-            behind = ~in_front
+            straddle, behind = [], set()
         else:  # agents wholly behind the camera are dropped, the few straddling it clipped
-            in_front = np.minimum.reduceat(z_part, starts[:-1]) >= Z_NEAR_M
-            behind = np.maximum.reduceat(z.max(axis=1), starts[:-1]) < Z_NEAR_M
+            z_max = cam_pts[..., 2].max(axis=1)
+            front = (np.minimum.reduceat(z_part, starts[:-1]) >= Z_NEAR_M).tolist()
+            back = (np.maximum.reduceat(z_max, starts[:-1]) < Z_NEAR_M).tolist()
+            behind = {i for i in range(n) if back[i]}
+            straddle = [i for i in range(n) if not front[i] and not back[i]]
         world_centres = cam_centres @ rot + cam.position_m if len(lighting.lamp_levels) else None
         rho = np.concatenate([m.reflectance for m in models])
         radiance = part_radiance(cam_centres, world_centres, rho, lighting).astype(np.float32)
         part_dist = np.einsum("ij,ij->i", cam_centres, cam_centres)  # squared: for the order
         uv = self._to_canvas(cam_pts)
         flat_uv = uv.reshape(-1, 2)
-        lo = np.minimum.reduceat(flat_uv, starts[:-1] * k)
-        hi = np.maximum.reduceat(flat_uv, starts[:-1] * k)
+        bounds = np.concatenate(
+            [
+                np.minimum.reduceat(flat_uv, np.multiply(starts[:-1], k)),
+                np.maximum.reduceat(flat_uv, np.multiply(starts[:-1], k)),
+            ],
+            axis=1,
+        ).tolist()
         order = np.lexsort((-part_dist, owner))  # grouped by agent, far parts first
         polys = self._outlines(
             np.rint(uv * (1 << SUBPIXEL_BITS)).astype(np.int32),
@@ -201,49 +202,65 @@ class AgentPainter:
         radiance = radiance[order]
 
         clipped: dict[int, list[np.ndarray]] = {}
-        drop = behind.copy()
-        for i in np.flatnonzero(~in_front & ~behind).tolist():
-            parts, lo[i], hi[i] = self._clipped_polygons(
-                cam_pts[order[starts_l[i] : starts_l[i + 1]]]
-            )
+        for i in straddle:
+            parts, lo, hi = self._clipped_polygons(cam_pts[order[starts[i] : starts[i + 1]]])
             clipped[i] = parts
-            drop[i] = not parts
+            bounds[i] = lo + hi
+            if not parts:
+                behind.add(i)
 
-        agent_dist, motion = self._distance_and_motion(shift, to_cam, height, speed, rot)
-        blurred = np.hypot(motion[:, 0], motion[:, 1]) >= MIN_BLUR_PX
-        pad = np.where(blurred, np.ceil(np.abs(motion).max(axis=1)) + 2.0, 1.0)[:, None]
+        # per agent, in plain Python (a few dozen agents: cheaper than array calls)
         h, w = self.canvas.shape
-        size = np.array([w, h, w, h])
-        box = np.concatenate([np.floor(lo) - pad, np.ceil(hi) + pad + 1.0], axis=1)
-        box = np.minimum(np.maximum(box, 0.0), size).astype(np.int64)
-        drop |= (box[:, 2] <= box[:, 0]) | (box[:, 3] <= box[:, 1])
-        shown = np.flatnonzero(~drop)
-        if len(shown) == 0:
+        fx, fy = self._focal.tolist()
+        cx, cy = self._centre.tolist()
+        up = rot[:, 2].tolist()
+        back_m = (self.exposure_s * pose[:, 4]).tolist() if self.motion_blur else [0.0] * n
+        rois, dist, motion, shown = [], [], [], []
+        for i, (sx, sy, sz), (hx, hy, hz), half_h, back, (ux0, uy0, ux1, uy1) in zip(
+            range(n),
+            shift.tolist(),
+            to_cam[:, :, 0].tolist(),
+            (0.5 * pose[:, 3]).tolist(),
+            back_m,
+            bounds,
+            strict=True,
+        ):
+            # the agent's centre now and an exposure ago (back along its heading, +x)
+            nx, ny, nz = sx + half_h * up[0], sy + half_h * up[1], sz + half_h * up[2]
+            dist.append(math.sqrt(nx * nx + ny * ny + nz * nz))
+            px, py, pz = nx - back * hx, ny - back * hy, nz - back * hz
+            du = dv = 0.0
+            if back > 0.0 and nz >= Z_NEAR_M and pz >= Z_NEAR_M:
+                du = fx * (px / pz - nx / nz)
+                dv = fy * (py / pz - ny / nz)
+            motion.append((du, dv))
+            pad = math.ceil(max(abs(du), abs(dv))) + 2 if math.hypot(du, dv) >= MIN_BLUR_PX else 1
+            x0 = min(max(math.floor(max(ux0, -1e6)) - pad, 0), w)
+            y0 = min(max(math.floor(max(uy0, -1e6)) - pad, 0), h)
+            x1 = max(min(math.ceil(min(ux1, 1e6)) + pad + 1, w), 0)
+            y1 = max(min(math.ceil(min(uy1, 1e6)) + pad + 1, h), 0)
+            rois.append((x0, y0, x1, y1))
+            if x1 > x0 and y1 > y0 and i not in behind:
+                shown.append(i)
+        if not shown:
             return [], boxes
-        cut = np.zeros(n, dtype=bool)
-        cut[shown] = nearest_occluder.of(box[shown]) < agent_dist[shown]
+        cut = [False] * n
+        nearest = nearest_occluder.of(np.array([rois[i] for i in shown])).tolist()
+        for i, near_m in zip(shown, nearest, strict=True):
+            cut[i] = near_m < dist[i]
 
-        far_first = shown[np.argsort(-agent_dist[shown], kind="stable")].tolist()
-        ctx = _Frame(
-            box.tolist(),
-            agent_dist.tolist(),
-            motion.tolist(),
-            cut.tolist(),
-            img,
-            occluder_depth,
-            labels,
-            boxes,
-        )
+        far_first = sorted(shown, key=lambda i: -dist[i])
+        ctx = PaintFrame(rois, dist, motion, cut, img, occluder_depth, labels, boxes)
         drawn: list[DrawnAgent] = []
         batch: list[int] = []
         batch_parts = 0
         for i in far_first:
-            if batch_parts + n_parts_l[i] > 255:
-                drawn += self._draw_batch(batch, ctx, starts_l, polys, clipped, radiance)
+            if batch_parts + n_parts[i] > 255:
+                drawn += self._draw_batch(batch, ctx, starts, polys, clipped, radiance)
                 batch, batch_parts = [], 0
             batch.append(i)
-            batch_parts += n_parts_l[i]
-        drawn += self._draw_batch(batch, ctx, starts_l, polys, clipped, radiance)
+            batch_parts += n_parts[i]
+        drawn += self._draw_batch(batch, ctx, starts, polys, clipped, radiance)
         return drawn, boxes
 
     def _outlines(
@@ -279,28 +296,6 @@ class AgentPainter:
         z = np.maximum(cam_pts[..., 2:], Z_NEAR_M)
         return cam_pts[..., :2] / z * self._focal + self._centre
 
-    def _distance_and_motion(
-        self,
-        shift: np.ndarray,
-        to_cam: np.ndarray,
-        height_m: np.ndarray,
-        speed_mps: np.ndarray,
-        rot: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Each agent's distance from the lens (m) to its centre (half its height up) and its
-        canvas displacement (N, 2) from time t back to t - exposure (0 without blur or when
-        the agent is not in front). ``shift`` (N, 3) and ``to_cam`` (N, 3, 3) take each
-        agent's model frame to the camera frame; ``rot`` is the camera's rotation."""
-        now = shift + (0.5 * height_m)[:, None] * rot[:, 2]
-        dist = np.sqrt(np.einsum("ij,ij->i", now, now))
-        if not self.motion_blur:
-            return dist, np.zeros((len(now), 2))
-        # back over the exposure along the heading: the model's +x axis in the camera frame
-        past = now - (self.exposure_s * speed_mps)[:, None] * to_cam[:, :, 0]
-        uv = self._to_canvas(np.stack([now, past]))
-        ok = (now[:, 2] >= Z_NEAR_M) & (past[:, 2] >= Z_NEAR_M)
-        return dist, np.where(ok[:, None], uv[1] - uv[0], 0.0)
-
     def _clipped_polygons(
         self, cam_pts: np.ndarray
     ) -> tuple[list[np.ndarray], list[float], list[float]]:
@@ -323,7 +318,7 @@ class AgentPainter:
     def _draw_batch(
         self,
         batch: list[int],
-        ctx: _Frame,
+        ctx: PaintFrame,
         starts: list[int],
         polys: np.ndarray,
         clipped: dict[int, list[np.ndarray]],
@@ -355,149 +350,30 @@ class AgentPainter:
             rank += e - s
             end[i] = rank
             x0, y0, x1, y1 = ctx.rois[i]
+            # counted now: nearer agents, drawn later, may cover it
             mine = cv2.compare(ranks[y0:y1, x0:x1], first[i] - 1, cv2.CMP_GT)
             silhouettes[i] = cv2.countNonZero(mine)
         drawn = []
         cluster_of = np.full(256, -1, np.intp)  # rank -> cluster
-        clusters = _clusters([i for i in batch if silhouettes[i] > 0], ctx)
-        for c, cluster in enumerate(clusters):
+        groups = clusters([i for i in batch if silhouettes[i] > 0], ctx)
+        for c, cluster in enumerate(groups):
             for i in cluster.members:
                 cluster_of[first[i] : end[i]] = c
-        for c, cluster in enumerate(clusters):
-            mine = cluster_of == c
-            self._composite(cluster, ctx, lut * mine, names * mine, first, end)
+        for c, cluster in enumerate(groups):
+            mine = (cluster_of == c).astype(np.float32)
+            composite(
+                self._ranks,
+                cluster,
+                ctx,
+                lut * mine,
+                names * mine.astype(names.dtype),
+                mine,
+                first,
+                end,
+            )
             ctx.boxes.append(tuple(cluster.box))
-            drawn += [
-                DrawnAgent(i, i + 1, tuple(ctx.rois[i]), silhouettes[i]) for i in cluster.members
-            ]
+            drawn += [DrawnAgent(i, i + 1, ctx.rois[i], silhouettes[i]) for i in cluster.members]
         for i in batch:
             x0, y0, x1, y1 = ctx.rois[i]
             ranks[y0:y1, x0:x1] = 0
         return drawn
-
-    def _composite(
-        self,
-        cluster: _Cluster,
-        ctx: _Frame,
-        lut: np.ndarray,
-        names: np.ndarray,
-        first: dict[int, int],
-        end: dict[int, int],
-    ) -> None:
-        """Occlusion cut, blur, composite and label one cluster of agents; ``lut`` and
-        ``names`` give the radiance and label of its members' part ranks (0 for others)."""
-        members = cluster.members
-        x0, y0, x1, y1 = cluster.box
-        ranks = self._ranks[y0:y1, x0:x1]
-        depth = ctx.occluder_depth[y0:y1, x0:x1]
-        cut = [i for i in members if ctx.cut[i]]
-        if cut:
-            # parts behind a nearer standing surface at time t are taken out before the smear
-            dist = np.zeros(256, np.float32)
-            for i in cut:
-                dist[first[i] : end[i]] = ctx.dist[i]
-            hidden = cv2.compare(depth, cv2.LUT(ranks, dist), cv2.CMP_LT)
-            cv2.subtract(ranks, ranks, dst=ranks, mask=hidden)
-        view = ctx.img[y0:y1, x0:x1]
-        out = ctx.labels[y0:y1, x0:x1]
-        du, dv = cluster.motion
-        if math.hypot(du, dv) < MIN_BLUR_PX:
-            # sharp: each member pixel simply takes the part's radiance and the member's label
-            now = cv2.LUT(ranks, names)
-            mask = now if now.dtype == np.uint8 else cv2.compare(now, 0, cv2.CMP_NE)
-            cv2.copyTo(cv2.LUT(ranks, lut), mask, view)
-            cv2.copyTo(now, mask, out)
-            return
-        h, w = ranks.shape
-        buf, second = stacked_layers(h, w, du, dv)
-        cv2.LUT(ranks, lut, dst=buf[:h])
-        cv2.LUT(ranks, (names > 0).astype(np.float32), dst=buf[second:])
-        buf = smear_stacked(buf, du, dv)
-        value, coverage = buf[:h], buf[second:]
-        if cut:
-            # ... and what the smear carries behind a surface nearer than all of them
-            nearest_m = min(ctx.dist[i] for i in members)
-            visible = cv2.compare(depth, nearest_m, cv2.CMP_GE)
-            if cv2.countNonZero(visible) < visible.size:
-                value = cv2.bitwise_and(value, value, mask=visible)
-                coverage = cv2.bitwise_and(coverage, coverage, mask=visible)
-        cv2.subtract(view, cv2.multiply(view, coverage), dst=view)
-        cv2.add(view, value, dst=view)
-        covered = coverage > 0.5
-        if len(members) == 1:
-            out[covered] = members[0] + 1
-            return
-        # each covered pixel belongs to the member there at mid-exposure
-        now = _shifted(cv2.LUT(ranks, names), round(du / 2), round(dv / 2))
-        np.copyto(out, now, where=covered & (now > 0))
-
-
-@dataclass(frozen=True)
-class _Frame:
-    """Per-agent figures of one paint call (plain lists: read one agent at a time) and the
-    frame's buffers."""
-
-    rois: list[list[int]]  # canvas boxes (x0, y0, x1, y1), blur margins included
-    dist: list[float]
-    motion: list[list[float]]  # canvas px from time t back to t - exposure
-    cut: list[bool]  # a standing surface in its box is nearer than the agent
-    img: np.ndarray
-    occluder_depth: np.ndarray
-    labels: np.ndarray
-    boxes: list[tuple[int, int, int, int]]  # canvas boxes drawn on, filled as clusters are drawn
-
-
-#: Two boxes are one cluster when their joint box holds at most this many more pixels
-#: than the two apart (about what one more round of OpenCV calls costs).
-CLUSTER_SLACK_PX = 1500
-
-
-@dataclass
-class _Cluster:
-    """Agents drawn in one go: one blur (their mean motion), one box."""
-
-    members: list[int]
-    box: list[int]  # x0, y0, x1, y1
-    motion_sum: list[float]
-
-    @property
-    def motion(self) -> tuple[float, float]:
-        k = len(self.members)
-        return self.motion_sum[0] / k, self.motion_sum[1] / k
-
-
-def _clusters(agents: list[int], ctx: _Frame) -> list[_Cluster]:
-    """Agents (far to near) split into clusters: boxes close together, image motions alike
-    (``similar_motion``). Clusters come far to near (by their nearest member)."""
-    clusters: list[_Cluster] = []
-    rois, motion = ctx.rois, ctx.motion
-    for i in agents:
-        ax0, ay0, ax1, ay1 = rois[i]
-        room = (ax1 - ax0) * (ay1 - ay0) + CLUSTER_SLACK_PX
-        for c in clusters:
-            cx0, cy0, cx1, cy1 = c.box
-            x0, y0 = min(ax0, cx0), min(ay0, cy0)
-            x1, y1 = max(ax1, cx1), max(ay1, cy1)
-            if (x1 - x0) * (y1 - y0) > (cx1 - cx0) * (cy1 - cy0) + room:
-                continue
-            if similar_motion(c.motion, motion[i]):
-                c.box[:] = x0, y0, x1, y1
-                c.members.append(i)
-                c.motion_sum[0] += motion[i][0]
-                c.motion_sum[1] += motion[i][1]
-                break
-        else:
-            clusters.append(_Cluster([i], [ax0, ay0, ax1, ay1], list(motion[i])))
-    clusters.sort(key=lambda c: -ctx.dist[c.members[-1]])
-    return clusters
-
-
-def _shifted(img: np.ndarray, dx: int, dy: int) -> np.ndarray:
-    """``img`` moved by (dx, dy) px, zeros where nothing moved in."""
-    h, w = img.shape
-    out = np.zeros_like(img)
-    if abs(dx) < w and abs(dy) < h:
-        out[max(dy, 0) : h + min(dy, 0), max(dx, 0) : w + min(dx, 0)] = img[
-            max(-dy, 0) : h - max(dy, 0), max(-dx, 0) : w - max(dx, 0)
-        ]
-    return out

@@ -158,15 +158,15 @@ class DrawModel:
         return len(self.geometry)
 
 
-#: (class, number of parts) -> the part topologies of the last model built: models of one
-#: class share them, so building a model checks them instead of searching
-_TOPOLOGY_HINTS: dict[tuple[str, int], list] = {}
+#: (class, part kind) -> topologies parts of that kind had (a few): models of one class are
+#: built alike, so building a model checks these instead of searching
+_TOPOLOGY_CANDIDATES: dict[tuple[str, str], list] = {}
 #: a model's key with its gait phases set to zero -> its parts' topologies, checked once: a
 #: gait only swings limbs (sheared boxes stay boxes), so its other phases reuse them
 _CHECKED_TOPOLOGY: dict[tuple, list] = {}
-#: key -> model, most recent last; the oldest are dropped past MAX_CACHED_MODELS
+#: key -> model, in the order built; past MAX_CACHED_MODELS the oldest goes (agents come and go)
 _DRAW_MODELS: dict[tuple, DrawModel] = {}
-MAX_CACHED_MODELS = 8192
+MAX_CACHED_MODELS = 4096
 
 
 def _still(phase_rad: float) -> float:
@@ -180,11 +180,8 @@ def _build_draw_model(key: tuple, still_key: tuple) -> DrawModel:
     if known is not None and len(known.rows) == len(corners):
         rows, normals, on_face = known.setup(corners)
     else:
-        hint_key = (key[0], len(corners))
-        rows, normals, on_face, found = model_topology(
-            corners, _TOPOLOGY_HINTS.get(hint_key, [None] * len(corners))
-        )
-        _TOPOLOGY_HINTS[hint_key] = found
+        candidates = [_TOPOLOGY_CANDIDATES.setdefault((key[0], k), []) for k in shape.part_kind]
+        rows, normals, on_face, found = model_topology(corners, candidates)
         if len(_CHECKED_TOPOLOGY) >= MAX_CACHED_MODELS:
             _CHECKED_TOPOLOGY.pop(next(iter(_CHECKED_TOPOLOGY)))
         _CHECKED_TOPOLOGY[still_key] = KnownTopology.of(found)
@@ -196,6 +193,24 @@ def _build_draw_model(key: tuple, still_key: tuple) -> DrawModel:
     for arr in (geometry, faces):
         arr.flags.writeable = False
     return DrawModel(geometry, faces, np.asarray(shape.ir_reflectance, dtype=np.float64))
+
+
+def prepare_models() -> None:
+    """Work out the part topologies of every class once (a typical model each), so that the
+    first frames need not: later models of a class only check them."""
+    if _TOPOLOGY_CANDIDATES:
+        return
+    walker = (0.0, 0.0, 0.5, 1.75, 0.6, 1.0)
+    typical = (
+        ("pedestrian", 0.5, 1.75, 0.6, 1.0),
+        ("group", (walker, (0.0, 0.8, 0.5, 1.7, 0.6, 2.0))),
+        ("cyclist", 0.6, 1.8, 1.7, 1.0),
+        ("vehicle", 1.8, 1.5, 4.4),
+        ("animal", 0.3, 0.5, 0.8, 1.0),
+    )
+    for key in typical:
+        if key[0] in AGENT_MODELS:
+            _build_draw_model(key, key)
 
 
 def draw_models(agents: Sequence[AgentState]) -> list[DrawModel]:

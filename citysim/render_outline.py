@@ -38,6 +38,14 @@ _tables: list[np.ndarray] = []
 _stacked: np.ndarray | None = None
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis (3): ``np.cross`` without its axis handling, which
+    costs more than the product for the small arrays here."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def outline_tables() -> np.ndarray:
     """All topologies' outline tables stacked: (T, 2**MAX_FACES, OUTLINE_VERTICES) int64."""
     global _stacked
@@ -91,7 +99,7 @@ def _face_normals(pts: np.ndarray, faces: tuple[tuple[int, ...], ...]) -> np.nda
     strictly convex face are collinear)."""
     idx = np.array([c[:3] for c in faces])
     a, b, c = pts[idx[:, 0]], pts[idx[:, 1]], pts[idx[:, 2]]
-    n = np.cross(b - a, c - b)
+    n = _cross(b - a, c - b)
     return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
@@ -120,36 +128,45 @@ def _holds(pts: np.ndarray, topology: Topology, eps: float) -> bool:
     return bool(np.all(np.abs(d[mine]) <= tol) and np.all(d[~mine] < -tol))
 
 
+#: Candidate topologies kept per kind of part (e.g. a vehicle's left and right wheels).
+MAX_CANDIDATES = 4
+
+
 def model_topology(
-    corners: np.ndarray, hints: list[Topology | None]
+    corners: np.ndarray, candidates: list[list[Topology]]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[Topology | None]]:
     """``part_topology`` for all parts (P, K, 3) of a model at once: (rows (P,), normals
-    (P, MAX_FACES, 3), on-face vertices (P, MAX_FACES), topologies). ``hints`` (one per part,
-    e.g. last model's of the same class) are checked together, a few vector operations per
-    distinct topology; parts whose hint fails get the full search."""
+    (P, MAX_FACES, 3), on-face vertices (P, MAX_FACES), topologies). Each part's
+    ``candidates`` (topologies of parts built the same way) are checked first, a few vector
+    operations per distinct topology; parts that match none get the full search, and their
+    topology is added to their candidates."""
     p = len(corners)
     rows = np.full(p, -1, np.int64)
     normals = np.zeros((p, MAX_FACES, 3))
     on_face = np.zeros((p, MAX_FACES), np.int64)
     found: list[Topology | None] = [None] * p
-    by_hint: dict[Topology, list[int]] = {}
-    for j, hint in enumerate(hints):
-        if hint is not None and j < p:
-            by_hint.setdefault(hint, []).append(j)
-    for topology, parts in by_hint.items():
-        ok, n = _holds_all(corners[parts], topology)
-        good = [j for j, g in zip(parts, ok.tolist(), strict=True) if g]
-        if not good:
-            continue
-        rows[good] = _row(topology)
-        for j in good:
-            found[j] = topology
-        if topology[0] != "flat":
-            normals[good, : len(topology)] = n[ok]
-            on_face[good, : len(topology)] = [c[0] for c in topology]
+    for r in range(MAX_CANDIDATES):
+        by_topology: dict[Topology, list[int]] = {}
+        for j in range(p):
+            if found[j] is None and r < len(candidates[j]):
+                by_topology.setdefault(candidates[j][r], []).append(j)
+        for topology, parts in by_topology.items():
+            ok, n = _holds_all(corners[parts], topology)
+            good = [j for j, g in zip(parts, ok.tolist(), strict=True) if g]
+            if not good:
+                continue
+            rows[good] = _row(topology)
+            for j in good:
+                found[j] = topology
+            if topology[0] != "flat":
+                normals[good, : len(topology)] = n[ok]
+                on_face[good, : len(topology)] = [c[0] for c in topology]
     for j in range(p):
         if found[j] is None:
             rows[j], normals[j], on_face[j], found[j] = part_topology(corners[j])
+            if found[j] is not None and found[j] not in candidates[j]:
+                candidates[j].insert(0, found[j])
+                del candidates[j][MAX_CANDIDATES:]
     return rows, normals, on_face, found
 
 
@@ -181,7 +198,7 @@ class KnownTopology:
         """``model_topology``'s arrays (rows, normals, on-face vertices) for parts (P, K, 3)."""
         p = np.arange(len(vertices))[:, None]
         a, b, c = (vertices[p, self.corners[..., m]] for m in range(3))
-        n = np.cross(b - a, c - b) * self.used
+        n = _cross(b - a, c - b) * self.used
         norm = np.linalg.norm(n, axis=2, keepdims=True)
         return self.rows, n / np.where(norm > 0.0, norm, 1.0), self.corners[..., 0]
 
@@ -204,7 +221,7 @@ def _holds_all(pts: np.ndarray, topology: Topology) -> tuple[np.ndarray, np.ndar
         idx = np.array([cycles[f] for f in faces])  # (F, m)
         corners = pts[:, idx]  # (N, F, m, 3)
         edges = np.roll(corners, -1, axis=2) - corners
-        turns = np.cross(edges, np.roll(edges, -1, axis=2))  # along each face's normal
+        turns = _cross(edges, np.roll(edges, -1, axis=2))  # along each face's normal
         n = turns.sum(axis=2)
         length = np.linalg.norm(n, axis=2)
         ok &= np.all(length > 0.0, axis=1)
@@ -248,9 +265,9 @@ def _plane_basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two in-plane unit axes (u, w = n x u): angles from u toward w run counter-clockwise
     seen from the tip of n."""
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(n, helper)
+    u = _cross(n, helper)
     u /= np.linalg.norm(u)
-    return u, np.cross(n, u)
+    return u, _cross(n, u)
 
 
 def _ccw(pts: np.ndarray, idx: list[int], n: np.ndarray, eps: float) -> tuple[int, ...] | None:
@@ -263,11 +280,12 @@ def _ccw(pts: np.ndarray, idx: list[int], n: np.ndarray, eps: float) -> tuple[in
     order = [idx[k] for k in np.argsort(ang)]
     start = order.index(min(order))
     order = order[start:] + order[:start]
-    k = len(order)
-    for j in range(k):  # every corner must turn left (strictly convex polygon)
-        a, b, d = pts[order[j - 1]], pts[order[j]], pts[order[(j + 1) % k]]
-        if np.dot(np.cross(b - a, d - b), n) <= eps * np.linalg.norm(b - a):
-            return None
+    # every corner must turn left (a strictly convex polygon)
+    ring = pts[order]
+    edges = np.roll(ring, -1, axis=0) - ring
+    turns = _cross(edges, np.roll(edges, -1, axis=0)) @ n
+    if np.any(turns <= eps * np.linalg.norm(edges, axis=1)):
+        return None
     return tuple(order)
 
 
@@ -283,23 +301,21 @@ def _flat_cycle(pts: np.ndarray, eps: float) -> tuple[int, ...] | None:
 def _faces(pts: np.ndarray, eps: float) -> list[tuple[tuple[int, ...], np.ndarray]] | None:
     """Faces of the convex hull of ``pts`` as (ccw vertex cycle, outward unit normal), each
     vertex a corner of its face; None when the points do not give such a polytope."""
+    # every vertex triple's plane at once: a hull face when all points lie on one side
+    tri = np.array(list(itertools.combinations(range(len(pts)), 3)))
+    a = pts[tri[:, 0]]
+    n = _cross(pts[tri[:, 1]] - a, pts[tri[:, 2]] - a)
+    length = np.linalg.norm(n, axis=1)
+    planar = length > eps * eps * 1e6
+    n = n[planar] / length[planar, None]
+    d = np.einsum("tk,tpk->tp", n, pts[None, :, :] - a[planar][:, None, :])
+    tol = 1e3 * eps
+    below, above = np.all(d <= tol, axis=1), np.all(d >= -tol, axis=1)
+    n[above & ~below] *= -1.0
+    on = np.abs(d) <= tol
     found: dict[frozenset[int], np.ndarray] = {}
-    for i, j, k in itertools.combinations(range(len(pts)), 3):
-        n = np.cross(pts[j] - pts[i], pts[k] - pts[i])
-        length = np.linalg.norm(n)
-        if length <= eps * eps * 1e6:
-            continue
-        n /= length
-        d = (pts - pts[i]) @ n
-        tol = 1e3 * eps
-        if np.all(d <= tol):
-            pass
-        elif np.all(d >= -tol):
-            n, d = -n, -d
-        else:
-            continue
-        key = frozenset(np.flatnonzero(np.abs(d) <= tol).tolist())
-        found.setdefault(key, n)
+    for t in np.flatnonzero(below | above).tolist():
+        found.setdefault(frozenset(np.flatnonzero(on[t]).tolist()), n[t])
     faces = []
     for key, n in found.items():
         cycle = _ccw(pts, sorted(key), n, eps)

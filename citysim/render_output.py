@@ -5,8 +5,9 @@ lit background changes only when a lamp changes level. So the frame of the
 background alone (radiance -> DN -> lens remap, ``render_canvas``) is kept,
 and a frame is that cached frame with the *boxes* that changed - where
 agents, spots, glare, crowns or insects were drawn on the canvas - converted
-and remapped again. When the boxes cover much of the canvas, the whole frame
-is redone at once instead (cheaper than many boxes).
+and remapped again. Only the boxes are ever converted to DN and put back to
+the background; when they cover much of the canvas, the lens remap is done
+for the whole frame at once instead of box by box.
 
 Light that is added on top of everything and does not move (the street
 lamps' own glare) is kept as a separate radiance layer: it is part of the
@@ -88,13 +89,24 @@ class FrameOutput:
         h, w = canvas.shape
         merged = merge_boxes(boxes)
         b = np.array(merged, dtype=np.int64).reshape(-1, 4)
+        work, dn = self.work, self._dn
+        for (x0, y0, x1, y1), glare in zip(merged, self._glare_touching(b), strict=True):
+            view = work[y0:y1, x0:x1]
+            if glare:  # added on the way out, not to work: boxes may overlap
+                view = cv2.add(view, self._glare[y0:y1, x0:x1])
+            light.radiance_to_dn(view, out=dn[y0:y1, x0:x1])
         area = int(((b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])).sum())
         if area + BOX_COST_PX * len(b) > WHOLE_FRAME_FRACTION * h * w:
-            frame = self._whole()
+            frame = canvas.to_frame(dn).copy() if canvas.remap_maps is None else canvas.to_frame(dn)
         else:
             frame = self._static_frame.copy()
-            if len(b):
-                self._boxes(merged, b, frame)
+            for box in canvas.frame_boxes(b).tolist():
+                if box[2] > box[0] and box[3] > box[1]:
+                    canvas.remap_box(dn, box, frame)
+        background, still = self._background, self._static_dn
+        for x0, y0, x1, y1 in merged:
+            work[y0:y1, x0:x1] = background[y0:y1, x0:x1]
+            dn[y0:y1, x0:x1] = still[y0:y1, x0:x1]
         frame_labels = None
         if labels is not None:
             frame_labels = np.zeros(frame.shape, labels.dtype)
@@ -103,31 +115,6 @@ class FrameOutput:
                     if box[2] > box[0] and box[3] > box[1]:
                         canvas.remap_box(labels, box, frame_labels, nearest=True)
         return frame, frame_labels
-
-    def _boxes(
-        self, merged: list[tuple[int, int, int, int]], b: np.ndarray, frame: np.ndarray
-    ) -> None:
-        glare = self._glare_touching(b)
-        work, dn = self.work, self._dn
-        for (x0, y0, x1, y1), add_glare in zip(merged, glare, strict=True):
-            view = work[y0:y1, x0:x1]
-            if add_glare:
-                cv2.add(view, self._glare[y0:y1, x0:x1], dst=view)
-            light.radiance_to_dn(view, out=dn[y0:y1, x0:x1])
-        for box in self.canvas.frame_boxes(b).tolist():
-            if box[2] > box[0] and box[3] > box[1]:
-                self.canvas.remap_box(dn, box, frame)
-        background, still = self._background, self._static_dn
-        for x0, y0, x1, y1 in merged:
-            work[y0:y1, x0:x1] = background[y0:y1, x0:x1]
-            dn[y0:y1, x0:x1] = still[y0:y1, x0:x1]
-
-    def _whole(self) -> np.ndarray:
-        if len(self._glare_boxes):
-            cv2.add(self.work, self._glare, dst=self.work)
-        frame = self.canvas.to_frame(light.radiance_to_dn(self.work))
-        np.copyto(self.work, self._background)
-        return frame
 
     def _glare_touching(self, boxes: np.ndarray) -> list[bool]:
         """Per box, whether any of the still glare lies in it."""

@@ -10,7 +10,7 @@ lands before the agents are drawn, so they hide it).
 The canvas is an ideal pinhole image, so ground plane -> canvas is a
 homography: each class's spot is a precomputed texture, warped with
 ``cv2.warpPerspective`` onto a grid SPOT_GRID times coarser than the canvas
-(spots are smooth), summed, scaled up once over the cells the spots reach and
+(spots are smooth), summed, scaled up only where they light the ground visibly and
 weighted by each pixel's ground reflectance. Everything but the warps is
 done for all lit agents at once.
 
@@ -34,6 +34,10 @@ from citysim.render_canvas import clip_solid_near, roi_of
 SPOT_TEXELS_FORWARD, SPOT_TEXELS_LATERAL = 96, 48
 #: Spots are accumulated on a grid this many times coarser than the canvas (they are smooth).
 SPOT_GRID = 4
+#: Irradiance (full-scale units) below which a spot adds nothing visible (under 1 DN on a
+#: dark road); the canvas is only touched where a spot exceeds it
+SPOT_MIN_IRRADIANCE = 0.002
+_CELL_MARGIN = np.ones((3, 3), np.uint8)
 
 
 def spot_extent_m(spec: BeamSpec) -> tuple[float, float]:
@@ -99,11 +103,11 @@ _SPOT_BOX_TEX = np.array(
 
 def add_ground_spots(
     scene: StaticScene, img: np.ndarray, agents: list[AgentState], gain: float
-) -> tuple[int, int, int, int] | None:
+) -> list[tuple[int, int, int, int]]:
     """Add the light spots of lit ``agents`` to the visible ground of ``img`` (radiance);
-    returns the canvas box drawn on, if any (see the module docstring)."""
+    returns the canvas boxes drawn on (see the module docstring)."""
     if not agents:
-        return None
+        return []
     canvas = scene.canvas
     h, w = canvas.shape
     g = SPOT_GRID
@@ -179,15 +183,47 @@ def add_ground_spots(
         view = coarse[cy0:cy1, cx0:cx1]
         cv2.add(view, patch, dst=view)
     if coarse is None:
-        return None
-    # scale up only the cells the spots reach, one zero cell around them: the border cells
-    # then interpolate with zeros, exactly as in a scaling of the whole grid
-    ex0, ey0, ex1, ey1 = max(ux0 - 1, 0), max(uy0 - 1, 0), min(ux1 + 1, cw), min(uy1 + 1, ch)
-    x0, y0 = g * ex0, g * ey0
-    x1, y1 = min(g * ex1, w), min(g * ey1, h)
-    e = cv2.resize(
-        coarse[ey0:ey1, ex0:ex1], (g * (ex1 - ex0), g * (ey1 - ey0)), interpolation=cv2.INTER_LINEAR
-    )[: y1 - y0, : x1 - x0]
-    view = img[y0:y1, x0:x1]
-    cv2.add(view, cv2.multiply(scene.ground_reflectance[y0:y1, x0:x1], e, scale=gain), dst=view)
-    return x0, y0, x1, y1
+        return []
+    # scale up only the cells the spots light, in boxes around each lit patch with a cell of
+    # margin: the interpolation then meets the same neighbours as in a scaling of the whole grid
+    lit = cv2.compare(coarse[uy0:uy1, ux0:ux1], SPOT_MIN_IRRADIANCE / gain, cv2.CMP_GT)
+    lit = cv2.dilate(lit, _CELL_MARGIN)
+    count, _, stats, _ = cv2.connectedComponentsWithStats(lit, connectivity=8)
+    cells_lit = [
+        (ux0 + bx, uy0 + by, ux0 + bx + bw, uy0 + by + bh)
+        for bx, by, bw, bh in stats[1:count, :4].tolist()
+    ]
+    boxes = []
+    for ex0, ey0, ex1, ey1 in _disjoint(cells_lit):
+        x0, y0 = g * ex0, g * ey0
+        x1, y1 = min(g * ex1, w), min(g * ey1, h)
+        e = cv2.resize(
+            coarse[ey0:ey1, ex0:ex1],
+            (g * (ex1 - ex0), g * (ey1 - ey0)),
+            interpolation=cv2.INTER_LINEAR,
+        )
+        if gain != 1.0:
+            e *= gain
+        view = img[y0:y1, x0:x1]
+        cv2.accumulateProduct(scene.ground_reflectance[y0:y1, x0:x1], e[: y1 - y0, : x1 - x0], view)
+        boxes.append((x0, y0, x1, y1))
+    return boxes
+
+
+def _disjoint(boxes: list[tuple[int, int, int, int]]) -> list[tuple[int, int, int, int]]:
+    """Boxes joined until none overlap (light must be added once)."""
+    out = list(boxes)
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(out)):
+            for j in range(i + 1, len(out)):
+                a, b = out[i], out[j]
+                if a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]:
+                    out[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
+                    del out[j]
+                    merged = True
+                    break
+            if merged:
+                break
+    return out

@@ -406,3 +406,127 @@ def test_bad_inputs_raise_errors_that_name_the_field() -> None:
 def test_bench_reports_ms_per_frame_for_each_object_count() -> None:
     got = bench_render((0, 3), frames=2)
     assert set(got) == {0, 3} and all(0.0 < ms < 1000.0 for ms in got.values())
+
+
+# ------------------------------------------------------------------ batched drawing parts
+@pytest.mark.parametrize("index", range(5))
+def test_part_outlines_from_face_tables_fill_like_the_convex_hull(index: int) -> None:
+    from citysim.render_models import draw_models
+    from citysim.render_outline import outline_mask_bits, outline_tables
+
+    model = draw_models([one_of_each(0.0)[index]])[0]
+    k = 8
+    rng = np.random.default_rng(index)
+    for _ in range(6):
+        # a random view: the model 6-15 m in front of a pinhole, turned any way
+        yaw, pitch = rng.uniform(-math.pi, math.pi), rng.uniform(-1.2, 0.3)
+        cy, sy, cp, sp = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch)
+        rot = np.array([[cy, -sy, 0.0], [sy * sp, cy * sp, -cp], [sy * cp, cy * cp, sp]])
+        shift = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(6, 15)])
+        geo = model.geometry @ rot.T
+        pts = geo[:, :k] + shift
+        uv = 300.0 * pts[..., :2] / pts[..., 2:] + 200.0
+        fixed = np.rint(uv * 16).astype(np.int32)
+        front = np.einsum("pfk,k->pf", geo[:, k + 1 :], shift) < -model.faces[:, 1:]
+        rows = model.faces[:, 0].astype(int)
+        assert np.all(rows >= 0)  # every part of the detector's models has a table
+        which = outline_tables()[rows, front @ outline_mask_bits()]
+        assert np.all(which[:, 0] >= 0)
+        for p in range(len(fixed)):
+            by_table = np.zeros((400, 400), np.uint8)
+            by_hull = np.zeros((400, 400), np.uint8)
+            cv2.fillConvexPoly(by_table, fixed[p][which[p]], 1, cv2.LINE_8, 4)
+            cv2.fillConvexPoly(by_hull, cv2.convexHull(fixed[p]), 1, cv2.LINE_8, 4)
+            # the same polygon up to vertices a rounding off its hull edges
+            assert np.count_nonzero(by_table != by_hull) <= 2 + 0.02 * by_hull.sum()
+
+
+def test_box_minimum_is_a_lower_bound_and_exact_on_whole_cells() -> None:
+    from citysim.render_canvas import RANGE_MIN_CELL_PX, BoxMinimum
+
+    rng = np.random.default_rng(0)
+    img = rng.uniform(0.0, 100.0, (70, 90)).astype(np.float32)
+    low = BoxMinimum(img)
+    boxes = []
+    for _ in range(300):
+        x0, y0 = rng.integers(0, 89), rng.integers(0, 69)
+        boxes.append((x0, y0, rng.integers(x0 + 1, 91), rng.integers(y0 + 1, 71)))
+    got = low.of(np.array(boxes))
+    assert all(g <= img[y0:y1, x0:x1].min() for g, (x0, y0, x1, y1) in zip(got, boxes, strict=True))
+    c = RANGE_MIN_CELL_PX
+    assert low.of(np.array([(c, 2 * c, 5 * c, 4 * c)]))[0] == img[2 * c : 4 * c, c : 5 * c].min()
+
+
+def test_frame_from_changed_boxes_is_the_whole_frame_converted() -> None:
+    from citysim.render_output import FrameOutput, merge_boxes
+
+    street = make_street(BARREL)
+    params = RenderParams(sensor_noise_std_dn=0.0, branch_sway=False)
+    r = renderer(params, street)
+    r.render(0.0, [], [1.0, 1.0])  # the still view is cached
+    out: FrameOutput = r.output
+    rng = np.random.default_rng(1)
+    boxes = [(10, 20, 60, 90), (50, 80, 140, 120), (300, 10, 330, 40), (0, 200, 40, 260)]
+    for x0, y0, x1, y1 in boxes:
+        out.work[y0:y1, x0:x1] += rng.uniform(0.0, 0.5, (y1 - y0, x1 - x0)).astype(np.float32)
+    expected = r.canvas.to_frame(light_to_dn(out.work.copy()))
+    frame, _ = out.finish(boxes)
+    assert np.array_equal(frame, expected)
+    assert np.array_equal(out.work, out._background)  # the background is back for the next frame
+    merged = merge_boxes(boxes + [(0, 0, 0, 5)])
+    for x0, y0, x1, y1 in boxes:  # every box lies in a merged one; the empty box is dropped
+        assert any(a <= x0 and b <= y0 and x1 <= c and y1 <= d for a, b, c, d in merged)
+
+
+def light_to_dn(radiance: np.ndarray) -> np.ndarray:
+    from citysim.render_light import radiance_to_dn
+
+    return radiance_to_dn(radiance)
+
+
+def test_agents_moving_alike_share_one_smear_and_keep_their_own_truth(monkeypatch) -> None:
+    import citysim.render_agents as render_agents
+
+    calls = []
+    original = render_agents.composite
+
+    def counting(*args, **kwargs):
+        calls.append(args[1].members)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(render_agents, "composite", counting)
+    blur = RenderParams(**{**EXACT.__dict__, "motion_blur": True})
+    riders = [
+        AgentState(1, "cyclist", 11.0, 4.0, math.pi / 2, 6.0, 1.7, 0.6, 1.8, gait_phase_rad=1.0),
+        AgentState(2, "cyclist", 11.5, 4.8, math.pi / 2, 6.0, 1.7, 0.6, 1.8, gait_phase_rad=2.0),
+    ]
+    together = renderer(blur).render(0.0, riders, [0.0, 0.0]).truth
+    assert len(calls) == 1 and sorted(calls[0]) == [0, 1]  # one smear for both
+    alone = [renderer(blur).render(0.0, [a], [0.0, 0.0]).truth[0] for a in riders]
+    for t in together:
+        (a,) = [s for s in alone if s.object_id == t.object_id]
+        assert box_iou((t.x, t.y, t.w, t.h), (a.x, a.y, a.w, a.h)) >= 0.6
+
+
+def test_ground_spots_touch_only_the_boxes_they_return() -> None:
+    from citysim.render_spots import add_ground_spots
+
+    r = renderer()
+    car = AgentState(4, "vehicle", 9.0, -1.75, 0.0, 12.0, 4.4, 1.8, 1.5, light_on=True)
+    img = np.zeros(r.canvas.shape, np.float32)
+    boxes = add_ground_spots(r.scene, img, [car], 1.0)
+    assert boxes and img.max() > 0.1
+    inside = np.zeros(img.shape, bool)
+    for x0, y0, x1, y1 in boxes:
+        inside[y0:y1, x0:x1] = True
+    assert not np.any(img[~inside])
+    assert inside.sum() < 0.6 * inside.size
+
+
+def test_noise_fields_per_frame_index_are_fixed_and_varied() -> None:
+    from citysim.render_effects import SensorNoise
+
+    picks = {SensorNoise.pick_for(7, k) for k in range(200)}
+    assert len(picks) > 190  # hardly any repeats
+    assert SensorNoise.pick_for(7, 3) == SensorNoise.pick_for(7, 3)
+    assert SensorNoise.pick_for(7, 3) != SensorNoise.pick_for(8, 3)

@@ -1,0 +1,160 @@
+"""Agents drawn together: clusters of agents that share one smear, and their compositing.
+
+The painter (``citysim.render_agents``) fills every agent's parts by rank into
+one buffer; this module splits the agents into *clusters* - boxes close
+together, image motions alike (``render_blur.similar_motion``) - and turns
+each cluster's ranks into radiance on the frame in one go:
+
+* parts behind a nearer standing surface (``occluder_depth``) are cut out;
+* sharp clusters (no motion worth a blur) take their parts' radiance and
+  labels directly;
+* moving clusters are smeared by their mean motion (radiance and coverage,
+  stacked in one buffer for a single filter pass), cut again where the smear
+  reaches behind a surface nearer than all members, and composited over the
+  frame; each covered pixel (coverage > 1/2) is labelled with the member there
+  at mid-exposure.
+
+Conventions: canvas pixels of ``citysim.render_canvas``, boxes (x0, y0, x1,
+y1) with exclusive ends, radiance in linear full-scale units.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from citysim.render_blur import MIN_BLUR_PX, similar_motion, smear_stacked, stacked_layers
+
+
+@dataclass(frozen=True)
+class PaintFrame:
+    """Per-agent figures of one paint call (plain lists: read one agent at a time) and the
+    frame's buffers."""
+
+    rois: list[tuple[int, int, int, int]]  # canvas boxes (x0, y0, x1, y1), blur margins in
+    dist: list[float]
+    motion: list[tuple[float, float]]  # canvas px from time t back to t - exposure
+    cut: list[bool]  # a standing surface in its box is nearer than the agent
+    img: np.ndarray
+    occluder_depth: np.ndarray
+    labels: np.ndarray
+    boxes: list[tuple[int, int, int, int]]  # canvas boxes drawn on, filled as clusters are drawn
+
+
+#: Two boxes are one cluster when their joint box holds at most this many more pixels
+#: than the two apart (about what one more round of OpenCV calls costs).
+CLUSTER_SLACK_PX = 1500
+
+
+@dataclass
+class Cluster:
+    """Agents drawn in one go: one blur (their mean motion), one box."""
+
+    members: list[int]
+    box: list[int]  # x0, y0, x1, y1
+    motion_sum: list[float]
+
+    @property
+    def motion(self) -> tuple[float, float]:
+        k = len(self.members)
+        return self.motion_sum[0] / k, self.motion_sum[1] / k
+
+
+def clusters(agents: list[int], ctx: PaintFrame) -> list[Cluster]:
+    """Agents (far to near) split into clusters: boxes close together, image motions alike
+    (``similar_motion``). Clusters come far to near (by their nearest member)."""
+    clusters: list[Cluster] = []
+    rois, motion = ctx.rois, ctx.motion
+    for i in agents:
+        ax0, ay0, ax1, ay1 = rois[i]
+        room = (ax1 - ax0) * (ay1 - ay0) + CLUSTER_SLACK_PX
+        for c in clusters:
+            cx0, cy0, cx1, cy1 = c.box
+            x0, y0 = min(ax0, cx0), min(ay0, cy0)
+            x1, y1 = max(ax1, cx1), max(ay1, cy1)
+            if (x1 - x0) * (y1 - y0) > (cx1 - cx0) * (cy1 - cy0) + room:
+                continue
+            if similar_motion(c.motion, motion[i]):
+                c.box[:] = x0, y0, x1, y1
+                c.members.append(i)
+                c.motion_sum[0] += motion[i][0]
+                c.motion_sum[1] += motion[i][1]
+                break
+        else:
+            clusters.append(Cluster([i], [ax0, ay0, ax1, ay1], list(motion[i])))
+    clusters.sort(key=lambda c: -ctx.dist[c.members[-1]])
+    return clusters
+
+
+def shifted(img: np.ndarray, dx: int, dy: int) -> np.ndarray:
+    """``img`` moved by (dx, dy) px, zeros where nothing moved in."""
+    h, w = img.shape
+    out = np.zeros_like(img)
+    if abs(dx) < w and abs(dy) < h:
+        out[max(dy, 0) : h + min(dy, 0), max(dx, 0) : w + min(dx, 0)] = img[
+            max(-dy, 0) : h - max(dy, 0), max(-dx, 0) : w - max(dx, 0)
+        ]
+    return out
+
+
+def composite(
+    ranks_buffer: np.ndarray,
+    cluster: Cluster,
+    ctx: PaintFrame,
+    lut: np.ndarray,
+    names: np.ndarray,
+    mine: np.ndarray,
+    first: dict[int, int],
+    end: dict[int, int],
+) -> None:
+    """Occlusion cut, blur, composite and label one cluster of agents whose parts are drawn
+    by rank in ``ranks_buffer`` (canvas); ``lut``, ``names`` and ``mine`` give the radiance,
+    label and 1.0 for its members' part ranks (0 for others), ``first`` and ``end`` each
+    member's first rank and one past its last."""
+    members = cluster.members
+    x0, y0, x1, y1 = cluster.box
+    ranks = ranks_buffer[y0:y1, x0:x1]
+    depth = ctx.occluder_depth[y0:y1, x0:x1]
+    cut = [i for i in members if ctx.cut[i]]
+    if cut:
+        # parts behind a nearer standing surface at time t are taken out before the smear
+        dist = np.zeros(256, np.float32)
+        for i in cut:
+            dist[first[i] : end[i]] = ctx.dist[i]
+        hidden = cv2.compare(depth, cv2.LUT(ranks, dist), cv2.CMP_LT)
+        cv2.subtract(ranks, ranks, dst=ranks, mask=hidden)
+    view = ctx.img[y0:y1, x0:x1]
+    out = ctx.labels[y0:y1, x0:x1]
+    du, dv = cluster.motion
+    if math.hypot(du, dv) < MIN_BLUR_PX:
+        # sharp: each member pixel simply takes the part's radiance and the member's label
+        now = cv2.LUT(ranks, names)
+        mask = now if now.dtype == np.uint8 else cv2.compare(now, 0, cv2.CMP_NE)
+        cv2.copyTo(cv2.LUT(ranks, lut), mask, view)
+        cv2.copyTo(now, mask, out)
+        return
+    h, w = ranks.shape
+    buf, second = stacked_layers(h, w, du, dv)
+    cv2.LUT(ranks, lut, dst=buf[:h])
+    cv2.LUT(ranks, mine, dst=buf[second:])
+    buf = smear_stacked(buf, du, dv)
+    value, coverage = buf[:h], buf[second:]
+    if cut:
+        # ... and what the smear carries behind a surface nearer than all of them
+        nearest_m = min(ctx.dist[i] for i in members)
+        visible = cv2.compare(depth, nearest_m, cv2.CMP_GE)
+        if cv2.countNonZero(visible) < visible.size:
+            value = cv2.bitwise_and(value, value, mask=visible)
+            coverage = cv2.bitwise_and(coverage, coverage, mask=visible)
+    cv2.subtract(view, cv2.multiply(view, coverage), dst=view)
+    cv2.add(view, value, dst=view)
+    covered = coverage > 0.5
+    if len(members) == 1:
+        out[covered] = members[0] + 1
+        return
+    # each covered pixel belongs to the member there at mid-exposure
+    now = shifted(cv2.LUT(ranks, names), round(du / 2), round(dv / 2))
+    np.copyto(out, now, where=covered & (now > 0))
