@@ -219,9 +219,13 @@ class CameraRenderer:
             raise ValueError(f"frame_index: must be >= 0, got {frame_index}")
         levels = self._levels(lamp_levels)
         agents, lit = self._in_view(list(agents))
-        self._still_view(levels)
+        if self._still_view(levels, t_s):  # rebuilt, crowns at time t included
+            depth = self.scene.depth
+        else:
+            depth, redrawn = self.scene.sway(t_s, levels, self.output.still, relit=False)
+            self.output.still_changed(redrawn)
         img = self.output.work
-        depth, boxes = self.scene.sway(t_s, levels, img)
+        boxes: list[tuple[int, int, int, int]] = []
 
         spot_gain = 1.0 - p.ambient_light
         if spot_gain > 0.0 and lit:
@@ -271,14 +275,14 @@ class CameraRenderer:
         truth = self._truth(agents, drawn, labels, frame_labels) if drawn else ()
         return RenderedFrame(frame, truth)
 
-    def _still_view(self, levels: np.ndarray) -> None:
-        """Bring the cached frame of the still view (lit background, lamp heads' glare) up to
-        the lamps' levels."""
+    def _still_view(self, levels: np.ndarray, t_s: float) -> bool:
+        """Bring the cached frame of the still view (lit background, crowns, lamp heads'
+        glare) up to the lamps' levels; whether it was rebuilt (crowns drawn at time t)."""
         key, lit = self.scene.lit(levels)
         heads = (levels > 0.0) & self._heads_in_view
         key = (key, tuple(levels[heads].tolist()))
         if key == self.output.key:
-            return
+            return False
         layer = np.zeros(self.canvas.shape, np.float32)
         glare_boxes = glare(
             self.canvas,
@@ -289,7 +293,14 @@ class CameraRenderer:
             np.full(int(heads.sum()), LAMP_HEAD_SIZE_M),
             self.params.rain_drops_per_frame > 0,
         )
-        self.output.set_background(key, lit, layer, np.array(glare_boxes).reshape(-1, 4))
+        self.output.set_background(
+            key,
+            lit,
+            layer,
+            np.array(glare_boxes).reshape(-1, 4),
+            lambda still: self.scene.sway(t_s, levels, still, relit=True),
+        )
+        return True
 
     def _truth(
         self,

@@ -248,6 +248,8 @@ class StaticScene:
         self._lit_key: tuple[float, ...] | None = None
         self._lit = self.base
         self._depth: np.ndarray | None = None  # this frame's depth, when crowns sway
+        self._poses: list[int] = [-1] * len(self.crowns)  # the poses drawn in the still view
+        self._crown_groups = _overlapping_groups([c.roi for c in self.crowns])
 
     # ------------------------------------------------------------------ build
     def _pools(self, hit: np.ndarray, pools_hit: np.ndarray, n: int) -> tuple[LampPool, ...]:
@@ -345,32 +347,46 @@ class StaticScene:
             self._lit, self._lit_key = lit, key
         return key, self._lit
 
+    @property
+    def depth(self) -> np.ndarray:
+        """The depth of standing surfaces with the crowns at the poses last drawn."""
+        return self.occluder_depth if self._depth is None else self._depth
+
     def sway(
-        self, t_s: float, lamp_levels: np.ndarray, img: np.ndarray
+        self, t_s: float, lamp_levels: np.ndarray, still: np.ndarray, relit: bool
     ) -> tuple[np.ndarray, list[tuple[int, int, int, int]]]:
-        """Composite the swaying crowns at time t into ``img`` (radiance): (this frame's depth of
-        standing surfaces (H, W) float32 - do not write to it; the canvas boxes drawn on)."""
+        """Keep the swaying crowns in ``still`` - the lit background (``lit``), crowns
+        composited at their poses - at their poses of time t: redraws only the groups of
+        (overlapping) crowns whose pose changed, or all when ``relit`` (``still`` was just
+        reset to the lit background). Returns this frame's depth of standing surfaces
+        ((H, W) float32, do not write to it) and the canvas boxes of ``still`` redrawn."""
         if not self.crowns:
             return self.occluder_depth, []
         if self._depth is None:
             self._depth = self.occluder_depth.copy()
-        depth = self._depth
-        for crown in self.crowns:  # last frame's poses out
-            x0, y0, x1, y1 = crown.roi
-            depth[y0:y1, x0:x1] = self.occluder_depth[y0:y1, x0:x1]
-        for crown in self.crowns:
-            self._composite_crown(crown, t_s, lamp_levels, img, depth)
-        return depth, [crown.roi for crown in self.crowns]
+        poses = [crown.pose(t_s) for crown in self.crowns]
+        boxes = []
+        for members, (x0, y0, x1, y1) in self._crown_groups:
+            if not relit and all(poses[i] == self._poses[i] for i in members):
+                continue
+            if not relit:
+                still[y0:y1, x0:x1] = self._lit[y0:y1, x0:x1]
+            self._depth[y0:y1, x0:x1] = self.occluder_depth[y0:y1, x0:x1]
+            for i in members:
+                self._composite_crown(self.crowns[i], poses[i], lamp_levels, still, self._depth)
+            boxes.append((x0, y0, x1, y1))
+        self._poses = poses
+        return self._depth, boxes
 
     def _composite_crown(
         self,
         crown: CrownSprite,
-        t_s: float,
+        pose: int,
         lamp_levels: np.ndarray,
         img: np.ndarray,
         depth: np.ndarray,
     ) -> None:
-        k = crown.pose(t_s)
+        k = pose
         value = crown.base[k]
         for j, pool in crown.pools:
             if lamp_levels[j] > 0.0:
@@ -381,3 +397,21 @@ class StaticScene:
         cv2.subtract(view, cv2.multiply(view, alpha), dst=view)
         cv2.add(view, value, dst=view)
         depth[y0:y1, x0:x1][crown.covered[k]] = crown.near_m
+
+
+def _overlapping_groups(
+    boxes: list[tuple[int, int, int, int]],
+) -> list[tuple[list[int], tuple[int, int, int, int]]]:
+    """Boxes (x0, y0, x1, y1) in groups that overlap (directly or through others): (indices
+    in order, the group's joint box). A group is redrawn as a whole, in order."""
+    groups: list[tuple[list[int], list[int]]] = []
+    for i, (x0, y0, x1, y1) in enumerate(boxes):
+        members, box = [i], [x0, y0, x1, y1]
+        for g in list(groups):
+            gx0, gy0, gx1, gy1 = g[1]
+            if box[0] < gx1 and gx0 < box[2] and box[1] < gy1 and gy0 < box[3]:
+                groups.remove(g)
+                members = g[0] + members
+                box = [min(box[0], gx0), min(box[1], gy0), max(box[2], gx1), max(box[3], gy1)]
+        groups.append((members, box))
+    return [(sorted(m), tuple(b)) for m, b in groups]

@@ -23,7 +23,7 @@ Conventions: canvas and frame pixels of ``citysim.render_canvas``; boxes are
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import cv2
 import numpy as np
@@ -44,8 +44,9 @@ class FrameOutput:
     """One camera's canvas radiance buffer and its conversion to frames.
 
     ``work`` is the canvas the renderer draws a frame on. Between frames it
-    holds the lit background (``set_background``); ``finish`` turns it into
-    the frame and puts the background back in the boxes that were drawn on.
+    holds the still view (``set_background``, ``still_changed``); ``finish``
+    turns it into the frame and puts the still view back in the boxes that
+    were drawn on.
     """
 
     def __init__(self, canvas: Canvas) -> None:
@@ -53,7 +54,8 @@ class FrameOutput:
         self.key: object = None
         h, w = canvas.shape
         self.work = np.zeros((h, w), np.float32)
-        self._background = self.work
+        #: the still view's radiance (lit background, crowns at their current poses)
+        self.still = np.zeros((h, w), np.float32)
         self._glare = np.zeros((h, w), np.float32)
         self._glare_boxes = np.zeros((0, 4), np.int64)
         self._dn = np.zeros((h, w), np.uint8)
@@ -61,19 +63,44 @@ class FrameOutput:
         self._static_frame = canvas.to_frame(self._dn)
 
     def set_background(
-        self, key: object, background: np.ndarray, glare: np.ndarray, glare_boxes: np.ndarray
+        self,
+        key: object,
+        background: np.ndarray,
+        glare: np.ndarray,
+        glare_boxes: np.ndarray,
+        redraw: Callable[[np.ndarray], object] | None = None,
     ) -> None:
-        """A new still view: ``background`` radiance (kept, not copied) and the lamps' ``glare``
-        radiance layer (zero outside ``glare_boxes`` (N, 4)). ``key`` names it."""
+        """A new still view: ``background`` radiance (copied) and the lamps' ``glare`` radiance
+        layer (zero outside ``glare_boxes`` (N, 4)); ``redraw(still)``, if given, draws on
+        the copy first. ``key`` names the view."""
         self.key = key
-        self._background = background
-        np.copyto(self.work, background)
+        self.still = background.copy()
+        if redraw is not None:
+            redraw(self.still)
+        np.copyto(self.work, self.still)
         self._glare = glare
         self._glare_boxes = np.asarray(glare_boxes, dtype=np.int64).reshape(-1, 4)
-        still = cv2.add(background, glare) if len(self._glare_boxes) else background
+        still = cv2.add(self.still, glare) if len(self._glare_boxes) else self.still
         self._static_dn = light.radiance_to_dn(still)
         self._dn = self._static_dn.copy()
-        self._static_frame = self.canvas.to_frame(self._static_dn)
+        self._static_frame = self.canvas.to_frame(self._static_dn).copy()
+
+    def still_changed(self, boxes: Sequence[Sequence[int]]) -> None:
+        """``still`` was drawn on inside canvas ``boxes``: bring the cached frame up to date."""
+        if not len(boxes):
+            return
+        b = np.array(boxes, dtype=np.int64).reshape(-1, 4)
+        glare = self._glare_touching(b)
+        for (x0, y0, x1, y1), add_glare in zip(b.tolist(), glare, strict=True):
+            view = self.still[y0:y1, x0:x1]
+            if add_glare:
+                view = cv2.add(view, self._glare[y0:y1, x0:x1])
+            light.radiance_to_dn(view, out=self._static_dn[y0:y1, x0:x1])
+            self.work[y0:y1, x0:x1] = self.still[y0:y1, x0:x1]
+            self._dn[y0:y1, x0:x1] = self._static_dn[y0:y1, x0:x1]
+        for box in self.canvas.frame_boxes(b).tolist():
+            if box[2] > box[0] and box[3] > box[1]:
+                self.canvas.remap_box(self._static_dn, box, self._static_frame)
 
     def finish(
         self,
@@ -103,10 +130,10 @@ class FrameOutput:
             for box in canvas.frame_boxes(b).tolist():
                 if box[2] > box[0] and box[3] > box[1]:
                     canvas.remap_box(dn, box, frame)
-        background, still = self._background, self._static_dn
+        background, still_dn = self.still, self._static_dn
         for x0, y0, x1, y1 in merged:
             work[y0:y1, x0:x1] = background[y0:y1, x0:x1]
-            dn[y0:y1, x0:x1] = still[y0:y1, x0:x1]
+            dn[y0:y1, x0:x1] = still_dn[y0:y1, x0:x1]
         frame_labels = None
         if labels is not None:
             frame_labels = np.zeros(frame.shape, labels.dtype)

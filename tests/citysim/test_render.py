@@ -472,7 +472,7 @@ def test_frame_from_changed_boxes_is_the_whole_frame_converted() -> None:
     expected = r.canvas.to_frame(light_to_dn(out.work.copy()))
     frame, _ = out.finish(boxes)
     assert np.array_equal(frame, expected)
-    assert np.array_equal(out.work, out._background)  # the background is back for the next frame
+    assert np.array_equal(out.work, out.still)  # the still view is back for the next frame
     merged = merge_boxes(boxes + [(0, 0, 0, 5)])
     for x0, y0, x1, y1 in boxes:  # every box lies in a merged one; the empty box is dropped
         assert any(a <= x0 and b <= y0 and x1 <= c and y1 <= d for a, b, c, d in merged)
@@ -530,3 +530,23 @@ def test_noise_fields_per_frame_index_are_fixed_and_varied() -> None:
     assert len(picks) > 190  # hardly any repeats
     assert SensorNoise.pick_for(7, 3) == SensorNoise.pick_for(7, 3)
     assert SensorNoise.pick_for(7, 3) != SensorNoise.pick_for(8, 3)
+
+
+def test_swaying_crowns_do_not_depend_on_the_frames_rendered_before() -> None:
+    # two overlapping crowns: their poses are kept in the cached still view between frames
+    trees = (
+        StaticObject("tree", 12.0, 8.5, 3.0, 3.0, 6.0, 0.5),
+        StaticObject("tree", 13.5, 8.0, 3.0, 3.0, 5.0, 0.5),
+    )
+    street = make_street(scenery=trees)
+    params = RenderParams(**{**EXACT.__dict__, "branch_sway": True, "wind_mps": 8.0})
+    times = [k / 5.0 for k in range(8)]
+    forward = renderer(params, street)
+    ahead = [forward.render(t, [], [1.0, 0.0]).image for t in times]
+    backward = renderer(params, street)
+    behind = [backward.render(t, [], [1.0, 0.0]).image for t in reversed(times)][::-1]
+    assert all(np.array_equal(a, b) for a, b in zip(ahead, behind, strict=True))
+    assert not np.array_equal(ahead[0], ahead[3])  # the crowns did move
+    relit = backward.render(times[2], [], [0.0, 0.0]).image  # lamp change: view rebuilt
+    again = renderer(params, street).render(times[2], [], [0.0, 0.0]).image
+    assert np.array_equal(relit, again)
