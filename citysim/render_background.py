@@ -14,7 +14,9 @@ surface, its distance, normal and reflectance. From those:
   spots.
 
 Tree crowns, when they sway, are kept as sprites (their own radiance, alpha
-and depth) shifted each frame by the wind and composited over the rest.
+and depth) pre-rendered in a few poses across their sway; the renderer keeps
+them composited at their current poses in its cached still view and redraws
+a group of overlapping crowns only when one of them changes pose (``sway``).
 
 Conventions: canvas of ``citysim.render_canvas`` (ideal pinhole pixels),
 radiance in linear full-scale units of ``citysim.render_light``, distances in
@@ -30,7 +32,7 @@ import cv2
 import numpy as np
 
 from citysim import render_light as light
-from citysim.render_canvas import BoxMinimum, Canvas, canvas_hull_px, roi_of
+from citysim.render_canvas import BoxMinimum, Canvas, canvas_hull_px, overlapping_groups, roi_of
 from citysim.render_scenery import Ellipsoid, Solid, _grain, ground_reflectance, scenery_parts
 from citysim.street import Street
 
@@ -249,7 +251,7 @@ class StaticScene:
         self._lit = self.base
         self._depth: np.ndarray | None = None  # this frame's depth, when crowns sway
         self._poses: list[int] = [-1] * len(self.crowns)  # the poses drawn in the still view
-        self._crown_groups = _overlapping_groups([c.roi for c in self.crowns])
+        self._crown_groups = overlapping_groups([c.roi for c in self.crowns])
 
     # ------------------------------------------------------------------ build
     def _pools(self, hit: np.ndarray, pools_hit: np.ndarray, n: int) -> tuple[LampPool, ...]:
@@ -397,21 +399,3 @@ class StaticScene:
         cv2.subtract(view, cv2.multiply(view, alpha), dst=view)
         cv2.add(view, value, dst=view)
         depth[y0:y1, x0:x1][crown.covered[k]] = crown.near_m
-
-
-def _overlapping_groups(
-    boxes: list[tuple[int, int, int, int]],
-) -> list[tuple[list[int], tuple[int, int, int, int]]]:
-    """Boxes (x0, y0, x1, y1) in groups that overlap (directly or through others): (indices
-    in order, the group's joint box). A group is redrawn as a whole, in order."""
-    groups: list[tuple[list[int], list[int]]] = []
-    for i, (x0, y0, x1, y1) in enumerate(boxes):
-        members, box = [i], [x0, y0, x1, y1]
-        for g in list(groups):
-            gx0, gy0, gx1, gy1 = g[1]
-            if box[0] < gx1 and gx0 < box[2] and box[1] < gy1 and gy0 < box[3]:
-                groups.remove(g)
-                members = g[0] + members
-                box = [min(box[0], gx0), min(box[1], gy0), max(box[2], gx1), max(box[3], gy1)]
-        groups.append((members, box))
-    return [(sorted(m), tuple(b)) for m, b in groups]

@@ -321,3 +321,21 @@ class BoxMinimum:
             np.minimum(t[ky, kx, lo[:, 1], lo[:, 0]], t[ky, kx, lo[:, 1], start[:, 0]]),
             np.minimum(t[ky, kx, start[:, 1], lo[:, 0]], t[ky, kx, start[:, 1], start[:, 0]]),
         )
+
+
+def overlapping_groups(
+    boxes: list[tuple[int, int, int, int]],
+) -> list[tuple[list[int], tuple[int, int, int, int]]]:
+    """Boxes (x0, y0, x1, y1) in groups that overlap (directly or through others): (indices
+    in order, the group's joint box). A group is redrawn as a whole, in order."""
+    groups: list[tuple[list[int], list[int]]] = []
+    for i, (x0, y0, x1, y1) in enumerate(boxes):
+        members, box = [i], [x0, y0, x1, y1]
+        for g in list(groups):
+            gx0, gy0, gx1, gy1 = g[1]
+            if box[0] < gx1 and gx0 < box[2] and box[1] < gy1 and gy0 < box[3]:
+                groups.remove(g)
+                members = g[0] + members
+                box = [min(box[0], gx0), min(box[1], gy0), max(box[2], gx1), max(box[3], gy1)]
+        groups.append((members, box))
+    return [(sorted(m), tuple(b)) for m, b in groups]
