@@ -20,12 +20,12 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
-import yaml
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from citysim.config_base import FieldPathError, ScenarioError, Spec, describe_validation_error
 from citysim.config_street import LampsSpec, StreetSpec
 from citysim.config_traffic import TrafficSpec
+from detector.yamlfile import read_yaml_mapping
 
 __all__ = [
     "ControllerSpec",
@@ -284,18 +284,7 @@ def scenario_from_mapping(
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario YAML file; raise ScenarioError naming the file and field."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except FileNotFoundError:
-        raise ScenarioError(f"{path}: scenario file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"{path}: cannot read scenario file ({exc})") from None
-    except yaml.YAMLError as exc:
-        raise ScenarioError(f"{path}: not valid YAML ({exc})".replace("\n", " ")) from None
-    if not isinstance(data, dict):
-        raise ScenarioError(
-            f"{path}: a scenario is a YAML mapping of sections, got {type(data).__name__}"
-        )
+    data = read_yaml_mapping(path, "scenario", ScenarioError, holds="sections")
     return scenario_from_mapping(data, source=str(path), base_dir=path.parent)
 
 

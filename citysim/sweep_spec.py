@@ -26,10 +26,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from citysim.config import ControllerSpec, Scenario, ScenarioError, load_scenario, override
+from detector.yamlfile import read_yaml_mapping
 
 __all__ = [
     "DERIVED_AXES",
@@ -245,16 +245,7 @@ def scenario_path_problem(dotted: str) -> str | None:
 def load_sweep(path: str | Path) -> ResolvedSweep:
     """Read and validate a sweep YAML file; raise SweepError naming the file and field."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except FileNotFoundError:
-        raise SweepError(f"{path}: sweep file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SweepError(f"{path}: cannot read sweep file ({exc})") from None
-    except yaml.YAMLError as exc:
-        raise SweepError(f"{path}: not valid YAML ({exc})".replace("\n", " ")) from None
-    if not isinstance(data, dict):
-        raise SweepError(f"{path}: a sweep is a YAML mapping, got {type(data).__name__}")
+    data = read_yaml_mapping(path, "sweep", SweepError)
     try:
         spec = SweepSpec.model_validate(data)
     except ValidationError as exc:

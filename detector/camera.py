@@ -31,8 +31,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from detector.yamlfile import read_yaml_mapping
 
 
 class CameraError(ValueError):
@@ -81,15 +82,7 @@ class CameraModel(BaseModel):
     @classmethod
     def from_yaml(cls, path: str | Path, **overrides: float) -> CameraModel:
         """Load a camera file; raise CameraError naming the file and the bad field."""
-        path = Path(path)
-        try:
-            data = yaml.safe_load(path.read_text())
-        except FileNotFoundError:
-            raise CameraError(f"{path}: camera file not found") from None
-        except (OSError, yaml.YAMLError) as exc:
-            raise CameraError(f"{path}: cannot read camera file ({exc})") from None
-        if not isinstance(data, dict):
-            raise CameraError(f"{path}: a camera file is a YAML mapping of fields, got {type(data).__name__}")
+        data = read_yaml_mapping(path, "camera", CameraError)
         data.update(overrides)
         return cls.from_mapping(data, source=str(path))
 
