@@ -34,7 +34,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
-import cv2
 import numpy as np
 
 from citysim.agents import AgentState
@@ -49,6 +48,7 @@ from citysim.render_beams import (
 )
 from citysim.render_canvas import build_canvas
 from citysim.render_effects import Insects, SensorNoise, draw_rain
+from citysim.render_kernels import label_stats
 from citysim.render_models import AGENT_MODELS, prepare_models
 from citysim.render_output import FrameOutput
 from citysim.render_spots import add_ground_spots, spot_reach
@@ -57,8 +57,6 @@ from detector.camera import CameraModel
 
 #: An agent hidden behind nearer things for more than this fraction is not fully visible.
 MAX_HIDDEN_FRACTION = 0.5
-#: With more agents drawn than this, their visible pixels are counted in one histogram.
-TRUTH_HISTOGRAM_AGENTS = 8
 
 _RANGES: dict[str, tuple[float, float]] = {
     "ir_emitter_power": (0.0, 1e6),
@@ -157,6 +155,9 @@ class CameraRenderer:
         prepare_models()
         self.painter = AgentPainter(self.canvas, params.exposure_ms, params.motion_blur)
         self.output = FrameOutput(self.canvas)
+        self._shown_at = self.canvas.frame_to_canvas_index()
+        no_uv = np.zeros((0, 0), np.float32)
+        self._frame_uv = self.canvas.frame_uv or (no_uv, no_uv)
         self.noise = (
             SensorNoise(rng, camera.height_px, camera.width_px, params.sensor_noise_std_dn)
             if params.sensor_noise_std_dn > 0.0
@@ -265,14 +266,14 @@ class CameraRenderer:
             self.canvas, img, max(t_s, 0.0), exposure_s, p.ir_emitter_power, p.ambient_light
         )
 
-        frame, frame_labels = self.output.finish(boxes, labels if drawn else None, drawn_boxes)
+        frame = self.output.finish(boxes)
         if self.noise is not None:
             if frame_index is None:
                 pick = self.noise.pick(self.rng)
             else:
                 pick = self.noise.pick_for(self._frame_seed, frame_index)
             frame = self.noise.apply(frame, pick)
-        truth = self._truth(agents, drawn, labels, frame_labels) if drawn else ()
+        truth = self._truth(agents, drawn, labels) if drawn else ()
         return RenderedFrame(frame, truth)
 
     def _still_view(self, levels: np.ndarray, t_s: float) -> bool:
@@ -307,37 +308,20 @@ class CameraRenderer:
         agents: list[AgentState],
         drawn: list[DrawnAgent],
         labels: np.ndarray,
-        frame_labels: np.ndarray,
     ) -> tuple[TruthObject, ...]:
         fw, fh = self.camera.width_px, self.camera.height_px
         drawn = sorted(drawn, key=lambda d: d.index)
-        boxes = self.canvas.frame_boxes(np.array([d.roi for d in drawn])).tolist()
-        # visible pixels: counted agent by agent when few, in one histogram when many
-        counts = None
-        if len(drawn) > TRUTH_HISTOGRAM_AGENTS:
-            if labels.dtype == np.uint8:
-                counts = cv2.calcHist([labels], [0], None, [256], [0, 256]).ravel().tolist()
-            else:
-                counts = np.bincount(labels.ravel(), minlength=len(agents) + 1).tolist()
+        rois = np.array([d.roi for d in drawn], np.int64)
+        # visible canvas pixels and the frame box of each agent's labelled pixels
+        stats = np.empty((len(drawn), 5), np.int64)
+        wanted = np.array([d.label for d in drawn], np.int64)
+        label_stats(labels, *self._frame_uv, self._shown_at, wanted, rois, stats)
         px, py, hx, hy = self._forward_axis
         out = []
-        for d, box in zip(drawn, boxes, strict=True):
-            x0, y0, x1, y1 = box
-            if x1 <= x0 or y1 <= y0:
+        for d, (visible_px, x, y, x1, y1) in zip(drawn, stats.tolist(), strict=True):
+            if visible_px == 0 or x1 <= x:
                 continue
-            if counts is None:
-                rx0, ry0, rx1, ry1 = d.roi
-                mine = cv2.compare(labels[ry0:ry1, rx0:rx1], d.label, cv2.CMP_EQ)
-                visible_px = cv2.countNonZero(mine)
-            else:
-                visible_px = counts[d.label]
-            if visible_px == 0:
-                continue
-            mine = cv2.compare(frame_labels[y0:y1, x0:x1], d.label, cv2.CMP_EQ)
-            bx, by, bw, bh = cv2.boundingRect(mine)
-            if bw == 0:
-                continue
-            x, y = bx + x0, by + y0
+            bw, bh = x1 - x, y1 - y
             touches = x == 0 or y == 0 or x + bw == fw or y + bh == fh
             hidden = 1.0 - min(visible_px / d.silhouette_px, 1.0)
             agent = agents[d.index]

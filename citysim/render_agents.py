@@ -30,7 +30,6 @@ DESIGN.md; ``heading_rad`` CCW from +x; radiance in linear full-scale units.
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -42,11 +41,11 @@ from citysim.agents import AgentState
 from citysim.render_blur import MIN_BLUR_PX, _smear
 from citysim.render_canvas import Z_NEAR_M, BoxMinimum, Canvas, clip_solid_near
 from citysim.render_clusters import PaintFrame, clusters, composite
+from citysim.render_kernels import SUBPIXEL_BITS, agent_box, clear_boxes, fill_ranks, pose_parts
 from citysim.render_models import draw_models
-from citysim.render_outline import outline_mask_bits, outline_tables
+from citysim.render_outline import outline_tables
 from detector.shape_parts import VERTICES_PER_PART
 
-SUBPIXEL_BITS = 4
 #: Clothes, paint and fur face the camera at varied angles; one mean incidence cosine.
 MEAN_INCIDENCE_COS = 0.8
 
@@ -92,6 +91,20 @@ class AgentLighting:
             float(light.day_irradiance(a, 0.0)) + light.night_irradiance(a),
         )
 
+    @property
+    def constants(self) -> np.ndarray:
+        """What ``render_kernels.pose_parts`` takes as ``light``."""
+        return np.array(
+            [
+                self.emitter_gain,
+                self.uniform_irradiance,
+                light.BEAM_EXPONENT,
+                light.LAMP_POWER,
+                light.LAMP_CUTOFF_COS,
+                light.SPREAD_COS,
+            ]
+        )
+
 
 def part_radiance(
     cam_centres_m: np.ndarray,
@@ -125,8 +138,9 @@ class AgentPainter:
         cam = canvas.camera
         self._rot = cam.rotation_world_to_cam
         self._pole = cam.position_m
-        self._focal = np.array([cam.fx_px, cam.fy_px])
-        self._centre = np.array([cam.cx_px - canvas.x0_px, cam.cy_px - canvas.y0_px])
+        self._camera_px = np.array(
+            [cam.fx_px, cam.fy_px, cam.cx_px - canvas.x0_px, cam.cy_px - canvas.y0_px]
+        )
 
     def paint(
         self,
@@ -150,98 +164,65 @@ class AgentPainter:
         models = draw_models(agents)
         n_parts = [m.n_parts for m in models]
         starts = [0, *itertools.accumulate(n_parts)]
+        n_total = starts[-1]
         owner = np.repeat(np.arange(n), n_parts)
         pose = np.array([(a.x_m, a.y_m, a.heading_rad, a.height_m, a.speed_mps) for a in agents])
-        cam = self.canvas.camera
-        rot = self._rot
-        # each agent's model frame -> camera frame: rotation to_cam (heading, then the
-        # camera's rotation) and the model origin's camera-frame position shift
-        c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
-        to_cam = np.empty((n, 3, 3))
-        to_cam[:, :, 0] = c[:, None] * rot[:, 0] + s[:, None] * rot[:, 1]
-        to_cam[:, :, 1] = c[:, None] * rot[:, 1] - s[:, None] * rot[:, 0]
-        to_cam[:, :, 2] = rot[:, 2]
-        shift = (pose[:, :2] - self._pole[:2]) @ rot[:, :2].T - self._pole[2] * rot[:, 2]
-        geometry = np.matmul(
-            np.concatenate([m.geometry for m in models]), to_cam[owner].transpose(0, 2, 1)
-        )
         k = VERTICES_PER_PART
-        part_shift = shift[owner]
-        geometry[:, : k + 1] += part_shift[:, None, :]  # vertices and centre; not the normals
-        cam_pts = geometry[:, :k]
-        cam_centres = geometry[:, k]
-        z_part = cam_pts[..., 2].min(axis=1)
-        if z_part.min() >= Z_NEAR_M:  # the common case: every vertex in front of the camera
-            straddle, behind = [], set()
-        else:  # agents wholly behind the camera are dropped, the few straddling it clipped
-            z_max = cam_pts[..., 2].max(axis=1)
-            front = (np.minimum.reduceat(z_part, starts[:-1]) >= Z_NEAR_M).tolist()
-            back = (np.maximum.reduceat(z_max, starts[:-1]) < Z_NEAR_M).tolist()
-            behind = {i for i in range(n) if back[i]}
-            straddle = [i for i in range(n) if not front[i] and not back[i]]
-        world_centres = cam_centres @ rot + cam.position_m if len(lighting.lamp_levels) else None
-        rho = np.concatenate([m.reflectance for m in models])
-        radiance = part_radiance(cam_centres, world_centres, rho, lighting).astype(np.float32)
-        part_dist = np.einsum("ij,ij->i", cam_centres, cam_centres)  # squared: for the order
-        uv = self._to_canvas(cam_pts)
-        flat_uv = uv.reshape(-1, 2)
-        bounds = np.concatenate(
-            [
-                np.minimum.reduceat(flat_uv, np.multiply(starts[:-1], k)),
-                np.maximum.reduceat(flat_uv, np.multiply(starts[:-1], k)),
-            ],
-            axis=1,
-        ).tolist()
-        order = np.lexsort((-part_dist, owner))  # grouped by agent, far parts first
-        polys = self._outlines(
-            np.rint(uv * (1 << SUBPIXEL_BITS)).astype(np.int32),
-            part_shift,
-            geometry[:, k + 1 :],
+        cam_pts = np.empty((n_total, k, 3))
+        polys = np.empty((n_total, k, 2), np.int32)
+        needs_hull = np.empty(n_total, np.bool_)
+        radiance = np.empty(n_total, np.float32)
+        part_dist = np.empty(n_total)
+        agent_z = np.empty((n, 2))
+        view = np.empty((n, 8))
+        pose_parts(
+            np.concatenate([m.geometry for m in models]),
             np.concatenate([m.faces for m in models]),
-        )[order]
-        radiance = radiance[order]
-
+            owner,
+            pose,
+            self._rot,
+            self._pole,
+            self._camera_px,
+            outline_tables(),
+            np.concatenate([m.reflectance for m in models]),
+            lighting.constants,
+            lighting.lamp_positions_m,
+            lighting.lamp_levels,
+            self.exposure_s if self.motion_blur else 0.0,
+            Z_NEAR_M,
+            MIN_BLUR_PX,
+            np.array(self.canvas.shape[::-1], np.int64),
+            cam_pts,
+            polys,
+            needs_hull,
+            radiance,
+            part_dist,
+            agent_z,
+            view,
+        )
+        for j in np.flatnonzero(needs_hull).tolist():  # parts without an outline table
+            hull = cv2.convexHull(polys[j])[:, 0]
+            polys[j] = np.concatenate([hull, np.repeat(hull[-1:], k - len(hull), 0)])
+        order = np.lexsort((-part_dist, owner))  # grouped by agent, far parts first
+        polys, radiance = polys[order], radiance[order]
+        straddle, behind = [], set()
+        if agent_z[:, 0].min() < Z_NEAR_M:  # wholly behind the camera: dropped; straddling: clipped
+            behind = set(np.flatnonzero(agent_z[:, 1] < Z_NEAR_M).tolist())
+            straddle = [
+                i for i in np.flatnonzero(agent_z[:, 0] < Z_NEAR_M).tolist() if i not in behind
+            ]
+        h, w = self.canvas.shape
         clipped: dict[int, list[np.ndarray]] = {}
         for i in straddle:
             parts, lo, hi = self._clipped_polygons(cam_pts[order[starts[i] : starts[i + 1]]])
             clipped[i] = parts
-            bounds[i] = lo + hi
+            view[i, 3:7] = agent_box(np.array(lo + hi), view[i, 1], view[i, 2], MIN_BLUR_PX, w, h)
             if not parts:
                 behind.add(i)
-
-        # per agent, in plain Python (a few dozen agents: cheaper than array calls)
-        h, w = self.canvas.shape
-        fx, fy = self._focal.tolist()
-        cx, cy = self._centre.tolist()
-        up = rot[:, 2].tolist()
-        back_m = (self.exposure_s * pose[:, 4]).tolist() if self.motion_blur else [0.0] * n
-        rois, dist, motion, shown = [], [], [], []
-        for i, (sx, sy, sz), (hx, hy, hz), half_h, back, (ux0, uy0, ux1, uy1) in zip(
-            range(n),
-            shift.tolist(),
-            to_cam[:, :, 0].tolist(),
-            (0.5 * pose[:, 3]).tolist(),
-            back_m,
-            bounds,
-            strict=True,
-        ):
-            # the agent's centre now and an exposure ago (back along its heading, +x)
-            nx, ny, nz = sx + half_h * up[0], sy + half_h * up[1], sz + half_h * up[2]
-            dist.append(math.sqrt(nx * nx + ny * ny + nz * nz))
-            px, py, pz = nx - back * hx, ny - back * hy, nz - back * hz
-            du = dv = 0.0
-            if back > 0.0 and nz >= Z_NEAR_M and pz >= Z_NEAR_M:
-                du = fx * (px / pz - nx / nz)
-                dv = fy * (py / pz - ny / nz)
-            motion.append((du, dv))
-            pad = math.ceil(max(abs(du), abs(dv))) + 2 if math.hypot(du, dv) >= MIN_BLUR_PX else 1
-            x0 = min(max(math.floor(max(ux0, -1e6)) - pad, 0), w)
-            y0 = min(max(math.floor(max(uy0, -1e6)) - pad, 0), h)
-            x1 = max(min(math.ceil(min(ux1, 1e6)) + pad + 1, w), 0)
-            y1 = max(min(math.ceil(min(uy1, 1e6)) + pad + 1, h), 0)
-            rois.append((x0, y0, x1, y1))
-            if x1 > x0 and y1 > y0 and i not in behind:
-                shown.append(i)
+        dist = view[:, 0].tolist()
+        motion = [tuple(m) for m in view[:, 1:3].tolist()]
+        rois = [tuple(r) for r in view[:, 3:7].astype(np.int64).tolist()]
+        shown = [i for i in np.flatnonzero(view[:, 7] > 0).tolist() if i not in behind]
         if not shown:
             return [], boxes
         cut = [False] * n
@@ -262,39 +243,6 @@ class AgentPainter:
             batch_parts += n_parts[i]
         drawn += self._draw_batch(batch, ctx, starts, polys, clipped, radiance)
         return drawn, boxes
-
-    def _outlines(
-        self,
-        fixed: np.ndarray,
-        part_shift: np.ndarray,
-        normals: np.ndarray,
-        faces: np.ndarray,
-    ) -> np.ndarray:
-        """Every part's outline: its fixed-point vertices (P, K, 2) reordered as its image's
-        convex polygon (``citysim.render_outline``; the hull for parts without a table).
-        ``part_shift`` (P, 3) is each part's model origin and ``normals`` (P, F, 3) its face
-        normals in the camera frame; ``faces`` as ``DrawModel.faces``."""
-        rows = faces[:, 0].astype(np.intp)
-        # a face looks at the camera (the origin, at -shift in the rotated model frame) when
-        # normal . (-shift) > offset
-        front = np.einsum("pfk,pk->pf", normals, part_shift) < -faces[:, 1:]
-        table = outline_tables()
-        if not len(table):
-            which = np.full(fixed.shape[:2], -1)
-        else:
-            which = table[np.maximum(rows, 0), front @ outline_mask_bits()]
-        p = np.arange(len(fixed))[:, None]
-        out = fixed[p, np.maximum(which, 0)]
-        for j in np.flatnonzero((rows < 0) | (which[:, 0] < 0)).tolist():
-            hull = cv2.convexHull(fixed[j])[:, 0]
-            out[j] = np.concatenate([hull, np.repeat(hull[-1:], len(fixed[j]) - len(hull), 0)])
-        return out
-
-    def _to_canvas(self, cam_pts: np.ndarray) -> np.ndarray:
-        """Camera-frame points (..., 3) -> canvas coordinates (..., 2); points before the near
-        plane get meaningless (finite) coordinates - their agents are clipped or dropped."""
-        z = np.maximum(cam_pts[..., 2:], Z_NEAR_M)
-        return cam_pts[..., :2] / z * self._focal + self._centre
 
     def _clipped_polygons(
         self, cam_pts: np.ndarray
@@ -330,29 +278,29 @@ class AgentPainter:
         if not batch:
             return []
         ranks = self._ranks
+        batch_arr = np.array(batch)
+        first_part = np.asarray(starts)[batch_arr]
+        counts = np.asarray(starts)[batch_arr + 1] - first_part
+        agent_parts = np.zeros(len(batch) + 1, np.int64)
+        np.cumsum(counts, out=agent_parts[1:])
+        n_batch = int(agent_parts[-1])
+        # the batch's parts in drawing order: part p of the batch gets rank p + 1
+        take = np.arange(n_batch) + np.repeat(first_part - agent_parts[:-1], counts)
+        outlines = polys[take]
+        n_verts = np.full(n_batch, outlines.shape[1], np.int64)
+        if clipped:
+            outlines, n_verts = _with_clipped(outlines, n_verts, batch, agent_parts, clipped)
         lut = np.zeros(256, np.float32)  # rank -> radiance
+        lut[1 : n_batch + 1] = radiance[take]
         names = np.zeros(256, ctx.labels.dtype)  # rank -> label
-        rank = 1
-        first, end, silhouettes = {}, {}, {}
-        fill = cv2.fillConvexPoly
-        for i in batch:
-            s, e = starts[i], starts[i + 1]
-            first[i] = rank
-            lut[rank : rank + e - s] = radiance[s:e]
-            names[rank : rank + e - s] = i + 1
-            if i in clipped:
-                for j, poly in enumerate(clipped[i]):
-                    if len(poly):
-                        fill(ranks, cv2.convexHull(poly), rank + j, cv2.LINE_8, SUBPIXEL_BITS)
-            else:
-                for j in range(s, e):
-                    fill(ranks, polys[j], rank + j - s, cv2.LINE_8, SUBPIXEL_BITS)
-            rank += e - s
-            end[i] = rank
-            x0, y0, x1, y1 = ctx.rois[i]
-            # counted now: nearer agents, drawn later, may cover it
-            mine = cv2.compare(ranks[y0:y1, x0:x1], first[i] - 1, cv2.CMP_GT)
-            silhouettes[i] = cv2.countNonZero(mine)
+        names[1 : n_batch + 1] = np.repeat(batch_arr + 1, counts)
+        rois = np.array([ctx.rois[i] for i in batch], np.int64)
+        sil = np.empty(len(batch), np.int64)
+        fill_ranks(ranks, outlines, n_verts, agent_parts, rois, sil)
+        bounds = agent_parts.tolist()
+        first = {i: bounds[k] + 1 for k, i in enumerate(batch)}
+        end = {i: bounds[k + 1] + 1 for k, i in enumerate(batch)}
+        silhouettes = dict(zip(batch, sil.tolist(), strict=True))
         drawn = []
         cluster_of = np.full(256, -1, np.intp)  # rank -> cluster
         groups = clusters([i for i in batch if silhouettes[i] > 0], ctx)
@@ -373,7 +321,31 @@ class AgentPainter:
             )
             ctx.boxes.append(tuple(cluster.box))
             drawn += [DrawnAgent(i, i + 1, ctx.rois[i], silhouettes[i]) for i in cluster.members]
-        for i in batch:
-            x0, y0, x1, y1 = ctx.rois[i]
-            ranks[y0:y1, x0:x1] = 0
+        clear_boxes(ranks, rois)
         return drawn
+
+
+def _with_clipped(
+    outlines: np.ndarray,
+    n_verts: np.ndarray,
+    batch: list[int],
+    agent_parts: np.ndarray,
+    clipped: dict[int, list[np.ndarray]],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The batch's outlines with the parts of agents cut at the near plane put in: their
+    hulls, padded to one length (an empty part draws nothing)."""
+    hulls = {}
+    longest = outlines.shape[1]
+    for k, i in enumerate(batch):
+        if i in clipped:
+            for j, poly in enumerate(clipped[i]):
+                hull = cv2.convexHull(poly)[:, 0] if len(poly) else poly.reshape(0, 2)
+                hulls[int(agent_parts[k]) + j] = hull
+                longest = max(longest, len(hull))
+    if longest > outlines.shape[1]:
+        pad = np.repeat(outlines[:, -1:], longest - outlines.shape[1], axis=1)
+        outlines = np.concatenate([outlines, pad], axis=1)
+    for p, hull in hulls.items():
+        n_verts[p] = len(hull)
+        outlines[p, : len(hull)] = hull
+    return outlines, n_verts

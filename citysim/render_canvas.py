@@ -97,6 +97,17 @@ class Canvas:
             borderMode=cv2.BORDER_REPLICATE,
         )
 
+    def frame_to_canvas_index(self) -> np.ndarray:
+        """(frame H, frame W) int32: the flat index (row * canvas width + col) of the canvas
+        pixel each frame pixel shows, by the nearest remap (border replicated)."""
+        fh, fw = self.camera.height_px, self.camera.width_px
+        if self.nearest_map is None:
+            cols, rows = np.meshgrid(np.arange(fw), np.arange(fh))
+        else:
+            cols = np.clip(self.nearest_map[..., 0].astype(np.int64), 0, self.width_px - 1)
+            rows = np.clip(self.nearest_map[..., 1].astype(np.int64), 0, self.height_px - 1)
+        return (rows * self.width_px + cols).astype(np.int32)
+
     def spheres_in_view(self, centres_m: np.ndarray, radii_m: np.ndarray) -> np.ndarray:
         """(N,) bool: which spheres (world centres (N, 3), radii (N,)) may show on the canvas.
 

@@ -23,10 +23,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from citysim.render_blur import MIN_BLUR_PX, similar_motion, smear_stacked, stacked_layers
+from citysim.render_kernels import cut_behind, paint_sharp, paint_smeared, rank_layers
 
 
 @dataclass(frozen=True)
@@ -89,17 +89,6 @@ def clusters(agents: list[int], ctx: PaintFrame) -> list[Cluster]:
     return clusters
 
 
-def shifted(img: np.ndarray, dx: int, dy: int) -> np.ndarray:
-    """``img`` moved by (dx, dy) px, zeros where nothing moved in."""
-    h, w = img.shape
-    out = np.zeros_like(img)
-    if abs(dx) < w and abs(dy) < h:
-        out[max(dy, 0) : h + min(dy, 0), max(dx, 0) : w + min(dx, 0)] = img[
-            max(-dy, 0) : h - max(dy, 0), max(-dx, 0) : w - max(dx, 0)
-        ]
-    return out
-
-
 def composite(
     ranks_buffer: np.ndarray,
     cluster: Cluster,
@@ -124,37 +113,32 @@ def composite(
         dist = np.zeros(256, np.float32)
         for i in cut:
             dist[first[i] : end[i]] = ctx.dist[i]
-        hidden = cv2.compare(depth, cv2.LUT(ranks, dist), cv2.CMP_LT)
-        cv2.subtract(ranks, ranks, dst=ranks, mask=hidden)
+        cut_behind(ranks, depth, dist)
     view = ctx.img[y0:y1, x0:x1]
     out = ctx.labels[y0:y1, x0:x1]
     du, dv = cluster.motion
     if math.hypot(du, dv) < MIN_BLUR_PX:
         # sharp: each member pixel simply takes the part's radiance and the member's label
-        now = cv2.LUT(ranks, names)
-        mask = now if now.dtype == np.uint8 else cv2.compare(now, 0, cv2.CMP_NE)
-        cv2.copyTo(cv2.LUT(ranks, lut), mask, view)
-        cv2.copyTo(now, mask, out)
+        paint_sharp(ranks, lut, names, view, out)
         return
     h, w = ranks.shape
     buf, second = stacked_layers(h, w, du, dv)
-    cv2.LUT(ranks, lut, dst=buf[:h])
-    cv2.LUT(ranks, mine, dst=buf[second:])
+    rank_layers(ranks, lut, mine, buf, second)
     buf = smear_stacked(buf, du, dv)
-    value, coverage = buf[:h], buf[second:]
-    if cut:
-        # ... and what the smear carries behind a surface nearer than all of them
-        nearest_m = min(ctx.dist[i] for i in members)
-        visible = cv2.compare(depth, nearest_m, cv2.CMP_GE)
-        if cv2.countNonZero(visible) < visible.size:
-            value = cv2.bitwise_and(value, value, mask=visible)
-            coverage = cv2.bitwise_and(coverage, coverage, mask=visible)
-    cv2.subtract(view, cv2.multiply(view, coverage), dst=view)
-    cv2.add(view, value, dst=view)
-    covered = coverage > 0.5
-    if len(members) == 1:
-        out[covered] = members[0] + 1
-        return
+    # ... and nothing the smear carries behind a surface nearer than all of them
+    nearest_m = min(ctx.dist[i] for i in members) if cut else -math.inf
     # each covered pixel belongs to the member there at mid-exposure
-    now = shifted(cv2.LUT(ranks, names), round(du / 2), round(dv / 2))
-    np.copyto(out, now, where=covered & (now > 0))
+    label = members[0] + 1 if len(members) == 1 else 0
+    paint_smeared(
+        buf[:h],
+        buf[second:],
+        depth,
+        nearest_m,
+        view,
+        out,
+        label,
+        ranks,
+        names,
+        round(du / 2),
+        round(dv / 2),
+    )

@@ -51,7 +51,7 @@ LAMP_CUTOFF_COS = 0.15
 BEAM_EXPONENT = 2.0
 
 
-_SPREAD_COS = float(np.cos(np.radians(LAMP_SPREAD_DEG)))
+SPREAD_COS = float(np.cos(np.radians(LAMP_SPREAD_DEG)))
 
 
 def emitter_irradiance(
@@ -100,7 +100,7 @@ def lamp_irradiance(
     cos_nadir = v[..., 2] / d  # angle from the lamp's downward axis
     # (np.minimum / np.maximum rather than np.clip: the same numbers, a fraction of the call cost)
     fade = np.minimum(np.maximum(cos_nadir * (1.0 / LAMP_CUTOFF_COS), 0.0), 1.0)
-    fade /= np.square(np.maximum(cos_nadir, _SPREAD_COS))
+    fade /= np.square(np.maximum(cos_nadir, SPREAD_COS))
     if normals is None:
         cos_surface = 0.5 + 0.5 * np.maximum(cos_nadir, 0.0)  # cos_nadir <= 1
     else:

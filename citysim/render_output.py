@@ -13,10 +13,6 @@ Light that is added on top of everything and does not move (the street
 lamps' own glare) is kept as a separate radiance layer: it is part of the
 cached frame and added again inside every redone box.
 
-The frame-space label image for the ground truth is made the same way: the
-canvas labels are remapped (nearest) only inside the redone boxes that hold
-agents.
-
 Conventions: canvas and frame pixels of ``citysim.render_canvas``; boxes are
 (x0, y0, x1, y1) with exclusive ends; radiance in linear full-scale units.
 """
@@ -102,16 +98,10 @@ class FrameOutput:
             if box[2] > box[0] and box[3] > box[1]:
                 self.canvas.remap_box(self._static_dn, box, self._static_frame)
 
-    def finish(
-        self,
-        boxes: Sequence[Sequence[int]],
-        labels: np.ndarray | None = None,
-        label_boxes: Sequence[Sequence[int]] = (),
-    ) -> tuple[np.ndarray, np.ndarray | None]:
+    def finish(self, boxes: Sequence[Sequence[int]]) -> np.ndarray:
         """The frame (uint8, frame size, a fresh array) of ``work`` where everything drawn
-        since the last call lies inside canvas ``boxes``; and, given canvas ``labels`` (zero
-        outside canvas ``label_boxes``), the frame's labels (nearest remap). Puts the
-        background back into ``work``."""
+        since the last call lies inside canvas ``boxes``. Puts the background back into
+        ``work``."""
         canvas = self.canvas
         h, w = canvas.shape
         merged = merge_boxes(boxes)
@@ -134,14 +124,7 @@ class FrameOutput:
         for x0, y0, x1, y1 in merged:
             work[y0:y1, x0:x1] = background[y0:y1, x0:x1]
             dn[y0:y1, x0:x1] = still_dn[y0:y1, x0:x1]
-        frame_labels = None
-        if labels is not None:
-            frame_labels = np.zeros(frame.shape, labels.dtype)
-            if len(label_boxes):
-                for box in canvas.frame_boxes(np.asarray(label_boxes)).tolist():
-                    if box[2] > box[0] and box[3] > box[1]:
-                        canvas.remap_box(labels, box, frame_labels, nearest=True)
-        return frame, frame_labels
+        return frame
 
     def _glare_touching(self, boxes: np.ndarray) -> list[bool]:
         """Per box, whether any of the still glare lies in it."""

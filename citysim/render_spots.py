@@ -4,15 +4,15 @@ A lit agent (``AgentState.light_on``, a class in ``render_beams.BEAMS``)
 throws a spot on the ground ahead of it:
 ``E = peak * exp(-((f - centre)/sigma_f)^2) * exp(-(l / (sigma_l + spread * f))^2)``
 for ground points ``f`` m ahead of and ``l`` m beside its lamps' mean
-position, zero behind it. Only pixels that see the ground get it (the spot
-lands before the agents are drawn, so they hide it).
+position, zero behind it (fading in over the first 0.5 m) and outside a
+ground box that holds the spot (``spot_extent_m``). Only pixels that see the
+ground get it (the spot lands before the agents are drawn, so they hide it).
 
-The canvas is an ideal pinhole image, so ground plane -> canvas is a
-homography: each class's spot is a precomputed texture, warped with
-``cv2.warpPerspective`` onto a grid SPOT_GRID times coarser than the canvas
-(spots are smooth), summed, scaled up only where they light the ground visibly and
-weighted by each pixel's ground reflectance. Everything but the warps is
-done for all lit agents at once.
+Spots are smooth, so ``E`` is evaluated at the centres of a grid SPOT_GRID
+times coarser than the canvas (``render_kernels.add_spots``, all lit agents in
+one call, each only over the cells its ground box covers), scaled up only
+where it lights the ground visibly and weighted by each pixel's ground
+reflectance.
 
 Conventions: canvas pixels (``citysim.render_canvas``), world frame of
 DESIGN.md (m), radiance in linear full-scale units.
@@ -20,6 +20,7 @@ DESIGN.md (m), radiance in linear full-scale units.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from functools import cache
 
@@ -29,9 +30,8 @@ import numpy as np
 from citysim.agents import AgentState
 from citysim.render_background import StaticScene
 from citysim.render_beams import BEAMS, BeamSpec
-from citysim.render_canvas import clip_solid_near, roi_of
+from citysim.render_kernels import add_spots as add_spot_cells
 
-SPOT_TEXELS_FORWARD, SPOT_TEXELS_LATERAL = 96, 48
 #: Spots are accumulated on a grid this many times coarser than the canvas (they are smooth).
 SPOT_GRID = 4
 #: Irradiance (full-scale units) below which a spot adds nothing visible (under 1 DN on a
@@ -46,28 +46,16 @@ def spot_extent_m(spec: BeamSpec) -> tuple[float, float]:
     return f_far, 1.6 * (spec.sigma_lateral_m + spec.spread_per_m * f_far)
 
 
-def spot_texture(spec: BeamSpec) -> np.ndarray:
-    """The spot's irradiance (full-scale units) on a ground grid: rows run forward from the
-    lamp (0 .. reach), columns across it (-half width .. +half width), texel centres on the grid."""
-    f_far, half_w = spot_extent_m(spec)
-    f = (np.arange(SPOT_TEXELS_FORWARD) + 0.5) * (f_far / SPOT_TEXELS_FORWARD)
-    lat = (np.arange(SPOT_TEXELS_LATERAL) + 0.5) * (2.0 * half_w / SPOT_TEXELS_LATERAL) - half_w
-    width = spec.sigma_lateral_m + spec.spread_per_m * f
-    e = np.exp(-(((f - spec.centre_m) / spec.sigma_forward_m) ** 2))[:, None] * np.exp(
-        -((lat[None, :] / width[:, None]) ** 2)
-    )
-    e *= np.clip(f / 0.5, 0.0, 1.0)[:, None]  # the light starts at the lamp, not before it
-    return (spec.peak_irradiance * e).astype(np.float32)
-
-
 @dataclass(frozen=True, eq=False)
 class SpotClass:
-    """One class's spot, ready to draw: texture and where it lies relative to the agent."""
+    """One class's spot, ready to draw: where it lies relative to the agent and its beam."""
 
-    texture: np.ndarray
     #: (forward, left) of the lamps' mean position as fractions of length and width, the
     #: forward reach (m) and half width (m) of the ground box holding the spot
     layout: tuple[float, float, float, float]
+    #: layout, then the beam's peak irradiance, centre (m), forward and lateral sigma (m) and
+    #: spread per metre: what ``render_kernels.add_spots`` takes per spot
+    row: tuple[float, ...]
 
 
 @cache
@@ -75,9 +63,15 @@ def spot_class(cls: str) -> SpotClass:
     spec = BEAMS[cls]
     lamps = np.array(spec.lamps_flz)
     f_far, half_w = spot_extent_m(spec)
-    texture = spot_texture(spec)
-    texture.flags.writeable = False
-    return SpotClass(texture, (float(lamps[:, 0].mean()), float(lamps[:, 1].mean()), f_far, half_w))
+    layout = (float(lamps[:, 0].mean()), float(lamps[:, 1].mean()), f_far, half_w)
+    beam = (
+        spec.peak_irradiance,
+        spec.centre_m,
+        spec.sigma_forward_m,
+        spec.sigma_lateral_m,
+        spec.spread_per_m,
+    )
+    return SpotClass(layout, layout + beam)
 
 
 def spot_reach(agents: list[AgentState]) -> tuple[np.ndarray, np.ndarray]:
@@ -91,14 +85,40 @@ def spot_reach(agents: list[AgentState]) -> tuple[np.ndarray, np.ndarray]:
     return centre, np.hypot(0.5 * f_far + length, half_w)
 
 
-_SPOT_BOX_TEX = np.array(
-    [
-        [-0.5, -0.5, 1.0],
-        [-0.5, SPOT_TEXELS_FORWARD - 0.5, 1.0],
-        [SPOT_TEXELS_LATERAL - 0.5, -0.5, 1.0],
-        [SPOT_TEXELS_LATERAL - 0.5, SPOT_TEXELS_FORWARD - 0.5, 1.0],
-    ]
-)
+class SpotGrid:
+    """One camera's coarse grid for spots: the ground point each cell centre sees."""
+
+    def __init__(self, scene: StaticScene) -> None:
+        canvas = scene.canvas
+        h, w = canvas.shape
+        g = SPOT_GRID
+        self.shape = ((h + g - 1) // g, (w + g - 1) // g)
+        # canvas (u, v) = g * (cell + 1/2) - 1/2 on the pinhole canvas
+        to_canvas = np.array([[g, 0.0, 0.5 * g - 0.5], [0.0, g, 0.5 * g - 0.5], [0.0, 0.0, 1.0]])
+        self.ground_to_cell = np.linalg.inv(to_canvas) @ scene.ground_to_canvas
+        rows, cols = np.mgrid[0 : self.shape[0], 0 : self.shape[1]]
+        cells = np.stack([cols, rows, np.ones_like(rows)], axis=-1).reshape(-1, 3).astype(float)
+        ground = cells @ np.linalg.inv(self.ground_to_cell).T
+        # a cell sees the ground where its ray points down: the homography's scale is positive
+        cam = canvas.camera
+        ray_cam = (to_canvas @ cells.T).T
+        ray_cam[:, 0] = (ray_cam[:, 0] + canvas.x0_px - cam.cx_px) / cam.fx_px
+        ray_cam[:, 1] = (ray_cam[:, 1] + canvas.y0_px - cam.cy_px) / cam.fy_px
+        ray_cam[:, 2] = 1.0
+        down = (ray_cam @ cam.rotation_world_to_cam)[:, 2] < -1e-9
+        xy = np.full((len(cells), 2), np.nan)
+        xy[down] = ground[down, :2] / ground[down, 2:]
+        self.cell_ground_m = xy.reshape(*self.shape, 2)
+
+
+_GRIDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def spot_grid(scene: StaticScene) -> SpotGrid:
+    grid = _GRIDS.get(scene)
+    if grid is None:
+        grid = _GRIDS[scene] = SpotGrid(scene)
+    return grid
 
 
 def add_ground_spots(
@@ -111,79 +131,25 @@ def add_ground_spots(
     canvas = scene.canvas
     h, w = canvas.shape
     g = SPOT_GRID
-    ch, cw = (h + g - 1) // g, (w + g - 1) // g
-    classes = [spot_class(a.cls) for a in agents]
+    grid = spot_grid(scene)
     rows = np.array(
         [
-            (a.x_m, a.y_m, a.heading_rad, a.length_m, a.width_m, *k.layout)
-            for a, k in zip(agents, classes, strict=True)
+            (a.x_m, a.y_m, a.heading_rad, a.length_m, a.width_m, *spot_class(a.cls).row)
+            for a in agents
         ]
     )
-    n = len(agents)
-    x, y, heading, length, width, f_frac, l_frac, f_far, half_w = rows.T
+    x, y, heading, length, width, f_frac, l_frac = rows[:, :7].T
     c, s = np.cos(heading), np.sin(heading)
     fl, ll = f_frac * length, l_frac * width
-    ox, oy = x + c * fl - s * ll, y + s * fl + c * ll  # the lamps' mean position: the beam origin
-    # texel (col, row) -> ground (x, y, 1): columns run to the left of the heading, rows forward
-    df, dl = f_far / SPOT_TEXELS_FORWARD, 2.0 * half_w / SPOT_TEXELS_LATERAL
-    tex_to_ground = np.zeros((n, 3, 3))
-    tex_to_ground[:, 0, 0], tex_to_ground[:, 0, 1] = -dl * s, df * c
-    tex_to_ground[:, 0, 2] = ox + half_w * s + 0.5 * (df * c - dl * s)
-    tex_to_ground[:, 1, 0], tex_to_ground[:, 1, 1] = dl * c, df * s
-    tex_to_ground[:, 1, 2] = oy - half_w * c + 0.5 * (df * s + dl * c)
-    tex_to_ground[:, 2, 2] = 1.0
-    box_world = np.einsum("nij,kj->nki", tex_to_ground, _SPOT_BOX_TEX)  # (n, 4, 3)
-    box_world[..., 2] = 0.0
-    box_cam = canvas.camera.world_to_cam(box_world.reshape(-1, 3)).reshape(n, 4, 3)
-    # the spot's ground box is cut where it leaves the camera's view of the ground (behind or under it)
-    z_cut = 0.8 * scene.nearest_ground_cam_z_m
-    whole = np.all(box_cam[..., 2] >= z_cut, axis=1)
-    uv = canvas.cam_to_canvas(np.where(whole[:, None, None], box_cam, 1.0).reshape(-1, 3))
-    uv = uv.reshape(n, 4, 2)
-    roi = np.concatenate(
-        [np.floor(uv.min(axis=1)) - 1.0, np.ceil(uv.max(axis=1)) + 2.0], axis=1
-    )  # canvas boxes (x0, y0, x1, y1)
-    roi = np.minimum(np.maximum(roi, 0.0), [w, h, w, h])
-    for i in np.flatnonzero(~whole).tolist():
-        pts = clip_solid_near(box_cam[i], z_cut)
-        cut = None if pts is None else roi_of(canvas.cam_to_canvas(pts), canvas)
-        roi[i] = cut if cut is not None else (0, 0, 0, 0)
-    # canvas box -> coarse cells, with a cell and a half of margin for the interpolation
-    cells = np.concatenate(
-        [
-            np.floor(np.maximum((roi[:, :2] + 0.5) / g - 1.5, 0.0)),
-            np.minimum(np.ceil((roi[:, 2:] - 0.5) / g + 1.5), [cw, ch]),
-        ],
-        axis=1,
-    ).astype(np.int64)
-    cells[(roi[:, 2] <= roi[:, 0]) | (roi[:, 3] <= roi[:, 1])] = 0
-    to_coarse = np.array(
-        [[1.0 / g, 0.0, 0.5 / g - 0.5], [0.0, 1.0 / g, 0.5 / g - 0.5], [0.0, 0.0, 1.0]]
-    )
-    to_cells = to_coarse @ scene.ground_to_canvas @ tex_to_ground  # (n, 3, 3)
-    # each warp writes its cells' box from (0, 0): move the cell origin there
-    to_cells[:, 0] -= cells[:, :1] * to_cells[:, 2]
-    to_cells[:, 1] -= cells[:, 1:2] * to_cells[:, 2]
-    coarse = None
-    for i, (cx0, cy0, cx1, cy1) in enumerate(cells.tolist()):
-        if cx1 <= cx0 or cy1 <= cy0:
-            continue
-        patch = cv2.warpPerspective(
-            classes[i].texture,
-            to_cells[i],
-            (cx1 - cx0, cy1 - cy0),
-            flags=cv2.INTER_LINEAR,
-            borderMode=cv2.BORDER_CONSTANT,
-        )
-        if coarse is None:
-            coarse = np.zeros((ch, cw), np.float32)
-            ux0, uy0, ux1, uy1 = cx0, cy0, cx1, cy1
-        else:
-            ux0, uy0, ux1, uy1 = min(ux0, cx0), min(uy0, cy0), max(ux1, cx1), max(uy1, cy1)
-        view = coarse[cy0:cy1, cx0:cx1]
-        cv2.add(view, patch, dst=view)
-    if coarse is None:
+    spots = np.column_stack([x + c * fl - s * ll, y + s * fl + c * ll, c, s, rows[:, 7:]])
+    coarse = np.zeros(grid.shape, np.float32)
+    touched = np.empty(4, np.int64)
+    add_spot_cells(coarse, grid.cell_ground_m, grid.ground_to_cell, spots, touched)
+    ux0, uy0, ux1, uy1 = touched.tolist()
+    if ux1 <= ux0:
         return []
+    ch, cw = grid.shape  # a cell of margin for the dilation below
+    ux0, uy0, ux1, uy1 = max(ux0 - 1, 0), max(uy0 - 1, 0), min(ux1 + 1, cw), min(uy1 + 1, ch)
     # scale up only the cells the spots light, in boxes around each lit patch with a cell of
     # margin: the interpolation then meets the same neighbours as in a scaling of the whole grid
     lit = cv2.compare(coarse[uy0:uy1, ux0:ux1], SPOT_MIN_IRRADIANCE / gain, cv2.CMP_GT)

@@ -470,7 +470,7 @@ def test_frame_from_changed_boxes_is_the_whole_frame_converted() -> None:
     for x0, y0, x1, y1 in boxes:
         out.work[y0:y1, x0:x1] += rng.uniform(0.0, 0.5, (y1 - y0, x1 - x0)).astype(np.float32)
     expected = r.canvas.to_frame(light_to_dn(out.work.copy()))
-    frame, _ = out.finish(boxes)
+    frame = out.finish(boxes)
     assert np.array_equal(frame, expected)
     assert np.array_equal(out.work, out.still)  # the still view is back for the next frame
     merged = merge_boxes(boxes + [(0, 0, 0, 5)])
