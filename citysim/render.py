@@ -19,11 +19,14 @@ linear radiance (``render_light``):
 Rendering a frame must cost less than detecting it. Step 5 is cached for the
 still view and redone only in the canvas boxes steps 1-4 drew on
 (``render_output``); the agents of a frame are posed, projected and shaded
-together, and drawn in clusters that share one smear.
+together, and drawn in clusters that share one smear; the per-pixel loops
+of agents, spots and truth are compiled (``render_kernels``), one call per
+frame or cluster rather than several OpenCV calls per agent.
 
 Ground truth: boxes are OpenCV ``boundingRect`` boxes (x, y, w, h) of the
 agent's *visible* rendered pixels in the output frame (with blur, the pixels
-the smeared agent covers more than half), clipped to the frame.
+the smeared agent covers more than half; with distortion, the frame pixels
+whose nearest canvas pixel shows it), clipped to the frame.
 ``distance_m`` is the forward ground distance of the footprint centre along
 the camera heading, the quantity ``detector.features`` estimates (eq. 4).
 Agents entirely hidden or out of view are not reported.

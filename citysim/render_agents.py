@@ -2,22 +2,21 @@
 
 Each ``AgentState`` becomes the detector's own 3D model (``citysim.render_models``,
 the shapes the classifier is trained on). Python call overhead, not pixels,
-is what agents cost, so everything that can is done for all agents of a
-frame at once:
+is what agents cost, so everything is done for all agents of a frame at once,
+in compiled loops (``citysim.render_kernels``):
 
-1. one rotation per agent takes every model's vertices, part centres and
-   face normals to the camera frame; all vertices are projected together;
-   each part's outline - its image's convex polygon - is read from the
-   model's cached table by which faces look at the camera
-   (``citysim.render_outline``), no hull per part and frame;
-2. part radiance for all parts at once (emitter light falling with the
-   square of the distance, daylight, the lamps' light at the part; see
-   ``citysim.render_light``);
-3. agents are drawn far to near into one buffer of part *ranks*
-   (``cv2.fillConvexPoly`` in 1/16-pixel fixed point, far parts first, one
-   rank per part, 255 parts per batch), so nearer parts win each pixel; each
-   agent's silhouette is counted as it is drawn, before nearer ones cover it;
-4. agents close together with alike image motion form a cluster, which is
+1. one call poses every model's parts in the camera frame (heading, then the
+   camera's rotation), projects their vertices, picks each part's outline -
+   its image's convex polygon - from the model's cached table by which faces
+   look at the camera (``citysim.render_outline``, no hull per part and
+   frame), shades each part (emitter light falling with the square of the
+   distance, daylight, the lamps' light at the part; ``citysim.render_light``)
+   and gives each agent's distance, image motion over the exposure and box;
+2. agents are filled far to near into one buffer of part *ranks* (pixels
+   whose centres lie inside a part, far parts first, one rank per part, 255
+   parts per batch), so nearer parts win each pixel; each agent's silhouette
+   is counted as it is drawn, before nearer ones cover it;
+3. agents close together with alike image motion form a cluster, which is
    cut where standing surfaces are nearer, smeared, composited and labelled
    for the ground truth in one go (``citysim.render_clusters``).
 
@@ -126,6 +125,20 @@ def part_radiance(
     return rho * irr
 
 
+@dataclass(frozen=True)
+class PosedParts:
+    """A frame's agents posed for drawing (``render_kernels.pose_parts`` names the arrays)."""
+
+    starts: list[int]  # agent i's parts are [starts[i], starts[i + 1])
+    owner: np.ndarray  # (P,) agent of each part
+    cam_pts: np.ndarray  # (P, K, 3) camera-frame vertices, m
+    polys: np.ndarray  # (P, K, 2) int32 fixed-point canvas outlines
+    radiance: np.ndarray  # (P,) float32
+    part_dist: np.ndarray  # (P,) squared distance of each part centre, m^2
+    agent_z: np.ndarray  # (N, 2) nearest and farthest vertex depth, m
+    view: np.ndarray  # (N, 8) distance, image motion, canvas box, shown
+
+
 class AgentPainter:
     """Draws agents on one camera's canvas (see the module docstring)."""
 
@@ -141,6 +154,56 @@ class AgentPainter:
         self._camera_px = np.array(
             [cam.fx_px, cam.fy_px, cam.cx_px - canvas.x0_px, cam.cy_px - canvas.y0_px]
         )
+
+    def pose(self, agents: Sequence[AgentState], lighting: AgentLighting) -> PosedParts:
+        """Every part of ``agents`` posed, projected and shaded (``render_kernels.pose_parts``);
+        parts without an outline table get their hull."""
+        n = len(agents)
+        models = draw_models(agents)
+        n_parts = [m.n_parts for m in models]
+        starts = [0, *itertools.accumulate(n_parts)]
+        n_total = starts[-1]
+        k = VERTICES_PER_PART
+        posed = PosedParts(
+            starts=starts,
+            owner=np.repeat(np.arange(n), n_parts),
+            cam_pts=np.empty((n_total, k, 3)),
+            polys=np.empty((n_total, k, 2), np.int32),
+            radiance=np.empty(n_total, np.float32),
+            part_dist=np.empty(n_total),
+            agent_z=np.empty((n, 2)),
+            view=np.empty((n, 8)),
+        )
+        needs_hull = np.empty(n_total, np.bool_)
+        pose_parts(
+            np.concatenate([m.geometry for m in models]),
+            np.concatenate([m.faces for m in models]),
+            posed.owner,
+            np.array([(a.x_m, a.y_m, a.heading_rad, a.height_m, a.speed_mps) for a in agents]),
+            self._rot,
+            self._pole,
+            self._camera_px,
+            outline_tables(),
+            np.concatenate([m.reflectance for m in models]),
+            lighting.constants,
+            lighting.lamp_positions_m,
+            lighting.lamp_levels,
+            self.exposure_s if self.motion_blur else 0.0,
+            Z_NEAR_M,
+            MIN_BLUR_PX,
+            np.array(self.canvas.shape[::-1], np.int64),
+            posed.cam_pts,
+            posed.polys,
+            needs_hull,
+            posed.radiance,
+            posed.part_dist,
+            posed.agent_z,
+            posed.view,
+        )
+        for j in np.flatnonzero(needs_hull).tolist():
+            hull = cv2.convexHull(posed.polys[j])[:, 0]
+            posed.polys[j] = np.concatenate([hull, np.repeat(hull[-1:], k - len(hull), 0)])
+        return posed
 
     def paint(
         self,
@@ -161,50 +224,11 @@ class AgentPainter:
         if not agents:
             return [], boxes
         n = len(agents)
-        models = draw_models(agents)
-        n_parts = [m.n_parts for m in models]
-        starts = [0, *itertools.accumulate(n_parts)]
-        n_total = starts[-1]
-        owner = np.repeat(np.arange(n), n_parts)
-        pose = np.array([(a.x_m, a.y_m, a.heading_rad, a.height_m, a.speed_mps) for a in agents])
-        k = VERTICES_PER_PART
-        cam_pts = np.empty((n_total, k, 3))
-        polys = np.empty((n_total, k, 2), np.int32)
-        needs_hull = np.empty(n_total, np.bool_)
-        radiance = np.empty(n_total, np.float32)
-        part_dist = np.empty(n_total)
-        agent_z = np.empty((n, 2))
-        view = np.empty((n, 8))
-        pose_parts(
-            np.concatenate([m.geometry for m in models]),
-            np.concatenate([m.faces for m in models]),
-            owner,
-            pose,
-            self._rot,
-            self._pole,
-            self._camera_px,
-            outline_tables(),
-            np.concatenate([m.reflectance for m in models]),
-            lighting.constants,
-            lighting.lamp_positions_m,
-            lighting.lamp_levels,
-            self.exposure_s if self.motion_blur else 0.0,
-            Z_NEAR_M,
-            MIN_BLUR_PX,
-            np.array(self.canvas.shape[::-1], np.int64),
-            cam_pts,
-            polys,
-            needs_hull,
-            radiance,
-            part_dist,
-            agent_z,
-            view,
-        )
-        for j in np.flatnonzero(needs_hull).tolist():  # parts without an outline table
-            hull = cv2.convexHull(polys[j])[:, 0]
-            polys[j] = np.concatenate([hull, np.repeat(hull[-1:], k - len(hull), 0)])
-        order = np.lexsort((-part_dist, owner))  # grouped by agent, far parts first
-        polys, radiance = polys[order], radiance[order]
+        posed = self.pose(agents, lighting)
+        starts, owner, view, agent_z = posed.starts, posed.owner, posed.view, posed.agent_z
+        n_parts = np.diff(starts).tolist()
+        order = np.lexsort((-posed.part_dist, owner))  # grouped by agent, far parts first
+        polys, radiance, cam_pts = posed.polys[order], posed.radiance[order], posed.cam_pts
         straddle, behind = [], set()
         if agent_z[:, 0].min() < Z_NEAR_M:  # wholly behind the camera: dropped; straddling: clipped
             behind = set(np.flatnonzero(agent_z[:, 1] < Z_NEAR_M).tolist())
@@ -216,7 +240,10 @@ class AgentPainter:
         for i in straddle:
             parts, lo, hi = self._clipped_polygons(cam_pts[order[starts[i] : starts[i + 1]]])
             clipped[i] = parts
-            view[i, 3:7] = agent_box(np.array(lo + hi), view[i, 1], view[i, 2], MIN_BLUR_PX, w, h)
+            view[i, 3:7] = box = agent_box(
+                np.array(lo + hi), view[i, 1], view[i, 2], MIN_BLUR_PX, w, h
+            )
+            view[i, 7] = float(box[2] > box[0] and box[3] > box[1])
             if not parts:
                 behind.add(i)
         dist = view[:, 0].tolist()

@@ -1,0 +1,197 @@
+"""The renderer's compiled loops agree with plain references: exact geometry, OpenCV, numpy."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from citysim.agents import AgentState
+from citysim.render import RenderParams
+from citysim.render_agents import AgentLighting, part_radiance
+from citysim.render_beams import BEAMS
+from citysim.render_canvas import Z_NEAR_M
+from citysim.render_kernels import SUBPIXEL_BITS, fill_ranks, label_stats
+from citysim.render_models import agent_shape
+from citysim.render_spots import add_ground_spots, spot_class
+from tests.citysim.test_render import BARREL, EXACT, PINHOLE, make_street, one_of_each, renderer
+
+ONE = 1 << SUBPIXEL_BITS
+
+
+def centre_inside(poly_fixed: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Exact integer test of every pixel centre against a convex polygon (either winding):
+    (inside or on an edge, exactly on an edge)."""
+    ys, xs = np.mgrid[0 : shape[0], 0 : shape[1]]
+    px, py = xs * ONE, ys * ONE
+    a = poly_fixed.astype(np.int64)
+    b = np.roll(a, -1, axis=0)
+    cross = np.stack(
+        [
+            (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+            for (ax, ay), (bx, by) in zip(a, b, strict=True)
+        ]
+    )
+    inside = np.all(cross >= 0, axis=0) | np.all(cross <= 0, axis=0)
+    return inside, np.any(cross == 0, axis=0)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_parts_fill_the_pixels_whose_centres_they_hold(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    shape = (60, 80)
+    polys, agent_parts, rois = [], [0], []
+    for _agent in range(3):
+        for _part in range(rng.integers(1, 4)):
+            pts = rng.uniform([-5, -5], [85, 65], (rng.integers(3, 9), 2)) * ONE
+            hull = cv2.convexHull(np.rint(pts).astype(np.int32))[:, 0]
+            padded = np.concatenate([hull, np.repeat(hull[-1:], 8 - len(hull), 0)])[:8]
+            polys.append(padded)
+        agent_parts.append(len(polys))
+        rois.append((0, 0, shape[1], shape[0]))
+    ranks = np.zeros(shape, np.uint8)
+    silhouettes = np.empty(3, np.int64)
+    stacked = np.array(polys, np.int32)
+    n_verts = np.full(len(polys), 8, np.int64)
+    fill_ranks(ranks, stacked, n_verts, np.array(agent_parts), np.array(rois), silhouettes)
+    expected = np.zeros(shape, np.uint8)
+    on_edge = np.zeros(shape, bool)
+    for p, poly in enumerate(polys):
+        inside, edge = centre_inside(poly, shape)
+        expected[inside] = p + 1
+        on_edge |= edge
+    clear = ~on_edge  # a centre exactly on an edge may go either way (floating point)
+    assert np.array_equal(ranks[clear], expected[clear])
+    # each agent's silhouette: its pixels before later (nearer) agents were drawn
+    for a in range(3):
+        mine = np.zeros(shape, bool)
+        for p in range(agent_parts[a], agent_parts[a + 1]):
+            mine |= centre_inside(polys[p], shape)[0]
+        edge_px = int(np.count_nonzero(on_edge))
+        assert abs(silhouettes[a] - np.count_nonzero(mine)) <= edge_px
+    # OpenCV's own fill covers the same pixels but for its one-pixel outline
+    cv_ranks = np.zeros(shape, np.uint8)
+    for p, poly in enumerate(polys):
+        cv2.fillConvexPoly(cv_ranks, poly, p + 1, cv2.LINE_8, SUBPIXEL_BITS)
+    assert np.count_nonzero((ranks > 0) & (cv_ranks == 0)) == 0
+
+
+def test_posed_parts_are_where_the_camera_model_projects_them() -> None:
+    r = renderer(RenderParams(**{**EXACT.__dict__, "motion_blur": True}))
+    agents = one_of_each(12.0)
+    lamps = np.array([[25.0, 6.8, 6.0]])
+    lighting = AgentLighting.of(80.0, 0.0, lamps, np.array([0.7]))
+    posed = r.painter.pose(agents, lighting)
+    cam = r.canvas.camera
+    for i, agent in enumerate(agents):
+        shape = agent_shape(agent, quantise_phase=True)
+        corners = shape.corners_m.reshape(-1, 3)
+        s, e = posed.starts[i], posed.starts[i + 1]
+        np.testing.assert_allclose(
+            posed.cam_pts[s:e].reshape(-1, 3), cam.world_to_cam(corners), atol=1e-9
+        )
+        uv = cam.project(corners, distort=False).reshape(e - s, -1, 2)
+        # each outline vertex is one of the part's projected vertices, rounded to 1/16 px
+        for p in range(e - s):
+            outline = posed.polys[s + p] / ONE
+            gap = np.abs(outline[:, None, :] - uv[p][None, :, :]).max(axis=2).min(axis=1)
+            assert gap.max() <= 0.5 / ONE + 1e-9
+        centres = corners.reshape(e - s, -1, 3).mean(axis=1)
+        expected = part_radiance(cam.world_to_cam(centres), centres, shape.ir_reflectance, lighting)
+        np.testing.assert_allclose(posed.radiance[s:e], expected, rtol=1e-5)
+        # distance of the body centre and image motion over the exposure
+        mid = np.array([[agent.x_m, agent.y_m, 0.5 * agent.height_m]])
+        assert posed.view[i, 0] == pytest.approx(np.linalg.norm(cam.world_to_cam(mid)), rel=1e-9)
+        back_m = r.params.exposure_ms / 1000.0 * agent.speed_mps
+        before = mid - back_m * np.array(
+            [[math.cos(agent.heading_rad), math.sin(agent.heading_rad), 0.0]]
+        )
+        motion = cam.project(before, distort=False) - cam.project(mid, distort=False)
+        np.testing.assert_allclose(posed.view[i, 1:3], motion[0], atol=1e-6)
+
+
+def test_label_statistics_match_a_remapped_label_image() -> None:
+    r = renderer(RenderParams(sensor_noise_std_dn=0.0), make_street(BARREL))
+    canvas = r.canvas
+    rng = np.random.default_rng(3)
+    labels = np.zeros(canvas.shape, np.uint8)
+    rois = []
+    for label in range(1, 9):
+        x0, y0 = rng.integers(0, canvas.width_px - 40), rng.integers(0, canvas.height_px - 40)
+        w, h = rng.integers(3, 40, 2)
+        cv2.ellipse(
+            labels,
+            (int(x0 + w // 2), int(y0 + h // 2)),
+            (int(w // 2), int(h // 2)),
+            0,
+            0,
+            360,
+            label,
+            -1,
+        )
+        rois.append((x0 - 2, y0 - 2, x0 + w + 2, y0 + h + 2))
+    rois = np.clip(np.array(rois), 0, [canvas.width_px, canvas.height_px] * 2).astype(np.int64)
+    stats = np.empty((8, 5), np.int64)
+    label_stats(
+        labels, *canvas.frame_uv, canvas.frame_to_canvas_index(), np.arange(1, 9), rois, stats
+    )
+    frame_labels = canvas.to_frame(labels, nearest=True)  # OpenCV's nearest remap
+    for label in range(1, 9):
+        x0, y0, x1, y1 = rois[label - 1]
+        assert stats[label - 1, 0] == np.count_nonzero(labels[y0:y1, x0:x1] == label)
+        seen = (frame_labels == label).astype(np.uint8)
+        bx, by, bw, bh = cv2.boundingRect(seen)
+        got = tuple(stats[label - 1, 1:])
+        assert got == ((bx, by, bx + bw, by + bh) if bw else (0, 0, 0, 0))
+
+
+def test_spots_follow_the_beam_formula_on_the_ground() -> None:
+    r = renderer()
+    car = AgentState(4, "vehicle", 6.0, -1.75, 0.1, 12.0, 4.4, 1.8, 1.5, light_on=True)
+    img = np.zeros(r.canvas.shape, np.float32)
+    add_ground_spots(r.scene, img, [car], 1.0)
+    spec, row = BEAMS["vehicle"], spot_class("vehicle").row
+    f_frac, l_frac, f_far, half_w = row[:4]
+    c, s = math.cos(car.heading_rad), math.sin(car.heading_rad)
+    ox = car.x_m + c * f_frac * car.length_m - s * l_frac * car.width_m
+    oy = car.y_m + s * f_frac * car.length_m + c * l_frac * car.width_m
+    g = r.scene.ground_xy_m
+    dx, dy = g[..., 0] - ox, g[..., 1] - oy
+    f, lat = dx * c + dy * s, dy * c - dx * s
+    width = spec.sigma_lateral_m + spec.spread_per_m * f
+    e = (
+        spec.peak_irradiance
+        * np.exp(-(((f - spec.centre_m) / spec.sigma_forward_m) ** 2) - (lat / width) ** 2)
+        * np.clip(f / 0.5, 0.0, 1.0)
+    )
+    e[~((f >= 0) & (f <= f_far) & (np.abs(lat) <= half_w))] = 0.0
+    rho = r.scene.ground_reflectance
+    bright = (e > 0.3 * spec.peak_irradiance) & (rho > 0)
+    assert bright.sum() > 200
+    # evaluated on cells 4 px apart and scaled up bilinearly: close everywhere, exact on average
+    rel = img[bright] / rho[bright] / e[bright] - 1.0
+    assert np.abs(rel).max() < 0.1 and abs(np.median(rel)) < 0.01
+    # nothing lands behind the car's lamps or off the ground
+    assert not np.any(img[(np.nan_to_num(f, nan=-1.0) < -0.5) | (rho == 0)])
+
+
+def test_agent_straddling_the_near_plane_is_clipped_and_reported() -> None:
+    r = renderer(EXACT, make_street(PINHOLE.placed(height_m=2.0, tilt_deg=5.0)))
+    empty = r.render(0.0, [], [0.0, 0.0]).image
+    # a car passing right beside a low camera: its rear is behind the camera's near plane
+    car = AgentState(7, "vehicle", 1.5, 3.5, 0.0, 0.0, 4.4, 1.8, 1.5)
+    lighting = AgentLighting.of(80.0, 0.0, np.zeros((0, 3)), np.zeros(0))
+    assert r.painter.pose([car], lighting).agent_z[0, 0] < Z_NEAR_M
+    frame = r.render(0.0, [car], [0.0, 0.0])
+    (truth,) = frame.truth
+    assert truth.touches_border and not truth.fully_visible
+    changed = np.argwhere(cv2.absdiff(empty, frame.image) > 0)
+    assert len(changed) > 100
+    y0, x0 = changed.min(axis=0)
+    y1, x1 = changed.max(axis=0)
+    assert (truth.x, truth.y) == (x0, y0) and (truth.x + truth.w - 1, truth.y + truth.h - 1) == (
+        x1,
+        y1,
+    )
