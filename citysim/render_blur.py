@@ -6,7 +6,7 @@ therefore the average of the layer over its positions from now (offset 0)
 back to ``(du, dv)`` px ago - a line kernel (``cv2.filter2D``).
 
 Agents near each other whose image motions are nearly equal (within 1 px or
-15 %, ``similar_motion``) share one smear, by their mean motion: the
+15 %, ``render_kernels.group_boxes``) share one smear, by their mean motion: the
 difference is below what a frame can show.
 
 Conventions: canvas pixels of ``citysim.render_canvas``; ``(du, dv)`` is the
@@ -22,6 +22,8 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
+from citysim.render_kernels import line_kernel
+
 #: Below this image motion over the exposure (px), blur is invisible and skipped.
 MIN_BLUR_PX = 0.5
 #: Blur kernels are cached on a grid of this many steps per pixel of motion.
@@ -34,13 +36,6 @@ SHARED_BLUR_PX = 1.0
 SHARED_BLUR_FRACTION = 0.15
 
 
-def similar_motion(a_px: tuple[float, float], b_px: tuple[float, float]) -> bool:
-    """Whether two image motions (du, dv) are close enough to share one smear."""
-    diff = math.hypot(a_px[0] - b_px[0], a_px[1] - b_px[1])
-    longer = max(math.hypot(*a_px), math.hypot(*b_px))
-    return diff <= max(SHARED_BLUR_PX, SHARED_BLUR_FRACTION * longer)
-
-
 def _blur_kernel(du_px: float, dv_px: float) -> tuple[np.ndarray, tuple[int, int]]:
     """Line kernel and its anchor for ``cv2.filter2D``: averages the layer over its positions
     from now (offset 0) back to ``(du, dv)`` px ago. The kernel only spans the line's bounding
@@ -50,26 +45,9 @@ def _blur_kernel(du_px: float, dv_px: float) -> tuple[np.ndarray, tuple[int, int
 
 @lru_cache(maxsize=4096)
 def _line_kernel(du_steps: int, dv_steps: int) -> tuple[np.ndarray, tuple[int, int]]:
-    du_px, dv_px = du_steps / KERNEL_STEPS_PER_PX, dv_steps / KERNEL_STEPS_PER_PX
-    # dst(p) = sum_o k(anchor + o) src(p + o): the layer seen s of the exposure ago sits at
-    # +s*d, so pixel p sees the source at p - s*d: weight at offset o = -s*d (bilinear splat)
-    n = int(math.ceil(2.0 * math.hypot(du_px, dv_px))) + 2
-    s = np.linspace(0.0, 1.0, n)
-    ox, oy = -s * du_px, -s * dv_px
-    ax, ay = -math.floor(min(ox.min(), 0.0)), -math.floor(min(oy.min(), 0.0))
-    width = ax + math.floor(max(ox.max(), 0.0)) + 2
-    height = ay + math.floor(max(oy.max(), 0.0)) + 2
-    x, y = ox + ax, oy + ay
-    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
-    fx, fy = x - x0, y - y0
-    idx = np.concatenate(
-        [y0 * width + x0, y0 * width + x0 + 1, (y0 + 1) * width + x0, (y0 + 1) * width + x0 + 1]
-    )
-    w = np.concatenate([(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy])
-    kernel = np.bincount(idx, weights=w, minlength=width * height).reshape(height, width)
-    kernel = (kernel / kernel.sum()).astype(np.float32)
+    kernel, ax, ay = line_kernel(du_steps / KERNEL_STEPS_PER_PX, dv_steps / KERNEL_STEPS_PER_PX)
     kernel.flags.writeable = False
-    return kernel, (int(ax), int(ay))
+    return kernel, (ax, ay)
 
 
 def _level(du_px: float, dv_px: float) -> int:

@@ -2,7 +2,7 @@
 
 The painter (``citysim.render_agents``) fills every agent's parts by rank into
 one buffer; this module splits the agents into *clusters* - boxes close
-together, image motions alike (``render_blur.similar_motion``) - and turns
+together, image motions alike (``render_kernels.group_boxes``) - and turns
 each cluster's ranks into radiance on the frame in one go:
 
 * parts behind a nearer standing surface (``occluder_depth``) are cut out;
@@ -25,8 +25,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from citysim.render_blur import MIN_BLUR_PX, similar_motion, smear_stacked, stacked_layers
-from citysim.render_kernels import cut_behind, paint_sharp, paint_smeared, rank_layers
+from citysim.render_blur import (
+    MIN_BLUR_PX,
+    SHARED_BLUR_FRACTION,
+    SHARED_BLUR_PX,
+    smear_stacked,
+    stacked_layers,
+)
+from citysim.render_kernels import (
+    cut_behind,
+    group_boxes,
+    paint_sharp,
+    paint_smeared,
+    rank_layers,
+)
 
 
 @dataclass(frozen=True)
@@ -65,28 +77,31 @@ class Cluster:
 
 def clusters(agents: list[int], ctx: PaintFrame) -> list[Cluster]:
     """Agents (far to near) split into clusters: boxes close together, image motions alike
-    (``similar_motion``). Clusters come far to near (by their nearest member)."""
-    clusters: list[Cluster] = []
-    rois, motion = ctx.rois, ctx.motion
-    for i in agents:
-        ax0, ay0, ax1, ay1 = rois[i]
-        room = (ax1 - ax0) * (ay1 - ay0) + CLUSTER_SLACK_PX
-        for c in clusters:
-            cx0, cy0, cx1, cy1 = c.box
-            x0, y0 = min(ax0, cx0), min(ay0, cy0)
-            x1, y1 = max(ax1, cx1), max(ay1, cy1)
-            if (x1 - x0) * (y1 - y0) > (cx1 - cx0) * (cy1 - cy0) + room:
-                continue
-            if similar_motion(c.motion, motion[i]):
-                c.box[:] = x0, y0, x1, y1
-                c.members.append(i)
-                c.motion_sum[0] += motion[i][0]
-                c.motion_sum[1] += motion[i][1]
-                break
-        else:
-            clusters.append(Cluster([i], [ax0, ay0, ax1, ay1], list(motion[i])))
-    clusters.sort(key=lambda c: -ctx.dist[c.members[-1]])
-    return clusters
+    (within SHARED_BLUR_PX or SHARED_BLUR_FRACTION; ``render_kernels.group_boxes``). Clusters come
+    far to near (by their nearest member)."""
+    if not agents:
+        return []
+    n = len(agents)
+    cluster_of = np.empty(n, np.int64)
+    joint = np.empty((n, 6))
+    k = group_boxes(
+        np.array([ctx.rois[i] for i in agents], np.int64),
+        np.array([ctx.motion[i] for i in agents], np.float64).reshape(n, 2),
+        CLUSTER_SLACK_PX,
+        SHARED_BLUR_PX,
+        SHARED_BLUR_FRACTION,
+        cluster_of,
+        joint,
+    )
+    members: list[list[int]] = [[] for _ in range(k)]
+    for i, c in zip(agents, cluster_of.tolist(), strict=True):
+        members[c].append(i)
+    out = [
+        Cluster(m, [int(v) for v in row[:4]], row[4:])
+        for m, row in zip(members, joint[:k].tolist(), strict=True)
+    ]
+    out.sort(key=lambda c: -ctx.dist[c.members[-1]])
+    return out
 
 
 def composite(

@@ -473,3 +473,98 @@ def add_spots(coarse, cell_ground, ground_to_cell, spots, touched):  # pragma: n
                 touched[1] = min(touched[1], i)
                 touched[2] = max(touched[2], j + 1)
                 touched[3] = max(touched[3], i + 1)
+
+
+@njit(cache=True, nogil=True)
+def group_boxes(
+    boxes, motion, slack_px, shared_px, shared_fraction, cluster_of, joint
+):  # pragma: no cover
+    """Greedy grouping of boxes (N, 4; x0, y0, x1, y1) in order: each joins the first group
+    whose joint box grows by at most its own area + ``slack_px`` pixels and whose mean image
+    motion (``motion`` (N, 2), px) is within ``shared_px`` px or ``shared_fraction`` of the
+    longer motion of its own; otherwise it starts a group. ``cluster_of`` (N,) gets each box's
+    group, ``joint`` (N, 6) each group's box and motion sum; returns the number of groups."""
+    k = 0
+    members = np.zeros(boxes.shape[0], np.int64)
+    for i in range(boxes.shape[0]):
+        ax0, ay0, ax1, ay1 = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
+        room = (ax1 - ax0) * (ay1 - ay0) + slack_px
+        mu, mv = motion[i, 0], motion[i, 1]
+        found = -1
+        for c in range(k):
+            cx0, cy0, cx1, cy1 = joint[c, 0], joint[c, 1], joint[c, 2], joint[c, 3]
+            x0, y0, x1, y1 = min(ax0, cx0), min(ay0, cy0), max(ax1, cx1), max(ay1, cy1)
+            if (x1 - x0) * (y1 - y0) > (cx1 - cx0) * (cy1 - cy0) + room:
+                continue
+            gu, gv = joint[c, 4] / members[c], joint[c, 5] / members[c]
+            diff = math.hypot(gu - mu, gv - mv)
+            longer = max(math.hypot(gu, gv), math.hypot(mu, mv))
+            if diff <= max(shared_px, shared_fraction * longer):
+                joint[c, 0], joint[c, 1], joint[c, 2], joint[c, 3] = x0, y0, x1, y1
+                joint[c, 4] += mu
+                joint[c, 5] += mv
+                found = c
+                break
+        if found < 0:
+            found = k
+            joint[k, 0], joint[k, 1], joint[k, 2], joint[k, 3] = ax0, ay0, ax1, ay1
+            joint[k, 4], joint[k, 5] = mu, mv
+            k += 1
+        cluster_of[i] = found
+        members[found] += 1
+    return k
+
+
+@njit(cache=True, nogil=True)
+def merge_box_list(boxes, cost_px):  # pragma: no cover - compiled
+    """Boxes (N, 4; x0, y0, x1, y1) joined where their joint box holds at most ``cost_px``
+    more pixels than the two apart, repeatedly; empty boxes dropped. Returns (M, 4)."""
+    out = np.empty_like(boxes)
+    m = 0
+    for i in range(boxes.shape[0]):
+        bx0, by0, bx1, by1 = boxes[i, 0], boxes[i, 1], boxes[i, 2], boxes[i, 3]
+        if bx1 <= bx0 or by1 <= by0:
+            continue
+        room = (bx1 - bx0) * (by1 - by0) + cost_px
+        joined = True
+        while joined:  # a grown box may now reach others: keep joining
+            joined = False
+            for k in range(m):
+                x0, y0, x1, y1 = out[k, 0], out[k, 1], out[k, 2], out[k, 3]
+                jx0, jy0, jx1, jy1 = min(x0, bx0), min(y0, by0), max(x1, bx1), max(y1, by1)
+                if (jx1 - jx0) * (jy1 - jy0) <= (x1 - x0) * (y1 - y0) + room:
+                    out[k : m - 1] = out[k + 1 : m].copy()
+                    m -= 1
+                    bx0, by0, bx1, by1 = jx0, jy0, jx1, jy1
+                    room = (bx1 - bx0) * (by1 - by0) + cost_px
+                    joined = True
+                    break
+        out[m, 0], out[m, 1], out[m, 2], out[m, 3] = bx0, by0, bx1, by1
+        m += 1
+    return out[:m]
+
+
+@njit(cache=True, nogil=True)
+def line_kernel(du_px, dv_px):  # pragma: no cover - compiled
+    """The motion-blur line kernel for ``cv2.filter2D`` and its anchor (x, y): the layer
+    averaged over its positions from now (offset 0) back to (du, dv) px ago, each sample
+    splatted bilinearly; the kernel spans only the line's bounding box."""
+    # dst(p) = sum_o k(anchor + o) src(p + o): the layer seen s of the exposure ago sits at
+    # +s*d, so pixel p sees the source at p - s*d: weight at offset o = -s*d
+    n = int(math.ceil(2.0 * math.hypot(du_px, dv_px))) + 2
+    ox_lo, oy_lo = min(-du_px, 0.0), min(-dv_px, 0.0)
+    ox_hi, oy_hi = max(-du_px, 0.0), max(-dv_px, 0.0)
+    ax, ay = -math.floor(ox_lo), -math.floor(oy_lo)
+    width = int(ax + math.floor(ox_hi)) + 2
+    height = int(ay + math.floor(oy_hi)) + 2
+    kernel = np.zeros((height, width))
+    for i in range(n):
+        s = i / (n - 1)
+        x, y = -s * du_px + ax, -s * dv_px + ay
+        x0, y0 = int(math.floor(x)), int(math.floor(y))
+        fx, fy = x - x0, y - y0
+        kernel[y0, x0] += (1 - fx) * (1 - fy)
+        kernel[y0, x0 + 1] += fx * (1 - fy)
+        kernel[y0 + 1, x0] += (1 - fx) * fy
+        kernel[y0 + 1, x0 + 1] += fx * fy
+    return (kernel / kernel.sum()).astype(np.float32), int(ax), int(ay)

@@ -26,6 +26,7 @@ import numpy as np
 
 from citysim import render_light as light
 from citysim.render_canvas import Canvas
+from citysim.render_kernels import merge_box_list
 
 #: Redo the whole frame when the changed boxes cover more than this fraction of the canvas.
 #: Boxes cost about what the whole frame costs per pixel plus a fixed ~10 OpenCV calls each,
@@ -142,22 +143,9 @@ class FrameOutput:
 
 def merge_boxes(boxes: Sequence[Sequence[int]]) -> list[tuple[int, int, int, int]]:
     """Boxes (x0, y0, x1, y1) joined where one box costs less than two: their joint box
-    holds at most BOX_COST_PX more pixels than the two apart. Empty boxes are dropped."""
-    out: list[list[int]] = []
-    for bx0, by0, bx1, by1 in boxes:
-        if bx1 <= bx0 or by1 <= by0:
-            continue
-        room = (bx1 - bx0) * (by1 - by0) + BOX_COST_PX
-        while True:  # a grown box may now reach others: keep joining
-            for k, (x0, y0, x1, y1) in enumerate(out):
-                jx0, jy0 = min(x0, bx0), min(y0, by0)
-                jx1, jy1 = max(x1, bx1), max(y1, by1)
-                if (jx1 - jx0) * (jy1 - jy0) <= (x1 - x0) * (y1 - y0) + room:
-                    del out[k]
-                    bx0, by0, bx1, by1 = jx0, jy0, jx1, jy1
-                    room = (bx1 - bx0) * (by1 - by0) + BOX_COST_PX
-                    break
-            else:
-                break
-        out.append([bx0, by0, bx1, by1])
-    return [tuple(b) for b in out]
+    holds at most BOX_COST_PX more pixels than the two apart (``render_kernels.merge_box_list``).
+    Empty boxes are dropped."""
+    if not len(boxes):
+        return []
+    merged = merge_box_list(np.array(boxes, np.int64).reshape(-1, 4), BOX_COST_PX)
+    return [tuple(b) for b in merged.tolist()]

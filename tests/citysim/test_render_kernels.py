@@ -195,3 +195,31 @@ def test_agent_straddling_the_near_plane_is_clipped_and_reported() -> None:
         x1,
         y1,
     )
+
+
+def test_boxes_group_by_nearness_and_alike_motion() -> None:
+    from citysim.render_kernels import group_boxes
+
+    boxes = np.array([(10, 10, 30, 50), (25, 12, 45, 52), (28, 10, 48, 50), (200, 10, 220, 50)])
+    motion = np.array([(4.0, 0.0), (4.3, 0.2), (-6.0, 0.0), (4.0, 0.0)])
+    cluster_of, joint = np.empty(4, np.int64), np.empty((4, 6))
+    k = group_boxes(boxes, motion, 1500, 1.0, 0.15, cluster_of, joint)
+    # near and alike: together; near but moving the other way: apart; far away: apart
+    assert k == 3 and cluster_of.tolist() == [0, 0, 1, 2]
+    assert joint[0, :4].tolist() == [10, 10, 45, 52] and joint[0, 4:].tolist() == [8.3, 0.2]
+
+
+def test_merged_boxes_cover_their_inputs_and_leave_nothing_worth_joining() -> None:
+    from citysim.render_output import BOX_COST_PX, merge_boxes
+
+    rng = np.random.default_rng(4)
+    xy = rng.integers(0, 300, (25, 2))
+    boxes = [(x, y, x + int(rng.integers(0, 60)), y + int(rng.integers(1, 60))) for x, y in xy]
+    merged = merge_boxes(boxes)
+    for x0, y0, x1, y1 in boxes:
+        if x1 > x0:
+            assert any(a <= x0 and b <= y0 and x1 <= c and y1 <= d for a, b, c, d in merged)
+    for i, (a0, b0, a1, b1) in enumerate(merged):
+        for c0, d0, c1, d1 in merged[i + 1 :]:
+            joint = (max(a1, c1) - min(a0, c0)) * (max(b1, d1) - min(b0, d0))
+            assert joint > (a1 - a0) * (b1 - b0) + (c1 - c0) * (d1 - d0) + BOX_COST_PX
