@@ -57,8 +57,8 @@ class PaintFrame:
 
 
 #: Two boxes are one cluster when their joint box holds at most this many more pixels
-#: than the two apart (about what one more round of OpenCV calls costs).
-CLUSTER_SLACK_PX = 1500
+#: than the two apart (a cluster costs about as much as smearing this many more pixels).
+CLUSTER_SLACK_PX = 4000
 
 
 @dataclass

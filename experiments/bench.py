@@ -180,7 +180,12 @@ scenario = override(load_scenario(sys.argv[1]), {"duration_s": float(sys.argv[3]
 t0 = time.perf_counter()
 run_controller(scenario, ControllerSpec(name=sys.argv[2]))
 wall_s = time.perf_counter() - t0
-print(json.dumps({"wall_s": wall_s, "max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+try:  # this process's own peak: ru_maxrss would also count the parent's memory at the fork
+    with open("/proc/self/status") as f:
+        peak_mb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM")) / 1024
+except OSError:
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"wall_s": wall_s, "max_rss_mb": peak_mb}))
 """
 
 
