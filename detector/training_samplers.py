@@ -41,6 +41,10 @@ class SizeRange:
     height_m: tuple[float, float]
     length_m: tuple[float, float]
 
+    def draw(self, rng: np.random.Generator) -> tuple[float, float, float]:
+        """One (width, height, length), each uniform in its range, drawn in that order."""
+        return uniform(rng, self.width_m), uniform(rng, self.height_m), uniform(rng, self.length_m)
+
 
 #: Paper Table 1 (length = "depth": step length, bicycle length, car length).
 TABLE1 = {
@@ -70,16 +74,8 @@ def ground_velocity(heading_rad: float, speed_mps: float) -> np.ndarray:
 
 
 def _pedestrian(rng: np.random.Generator, cam: CameraModel, x: float, y: float, heading: float):
-    s = TABLE1["pedestrian"]
-    shape = pedestrian_shape(
-        x,
-        y,
-        heading,
-        uniform(rng, s.width_m),
-        uniform(rng, s.height_m),
-        uniform(rng, s.length_m),
-        rng.uniform(0, 2 * math.pi),
-    )
+    size = TABLE1["pedestrian"].draw(rng)
+    shape = pedestrian_shape(x, y, heading, *size, rng.uniform(0, 2 * math.pi))
     return shape, ground_velocity(heading, rng.uniform(0.5, 2.5))
 
 
@@ -112,29 +108,13 @@ def _group(rng: np.random.Generator, cam: CameraModel, x: float, y: float, headi
 
 
 def _cyclist(rng: np.random.Generator, cam: CameraModel, x: float, y: float, heading: float):
-    s = TABLE1["cyclist"]
-    shape = cyclist_shape(
-        x,
-        y,
-        heading,
-        uniform(rng, s.width_m),
-        uniform(rng, s.height_m),
-        uniform(rng, s.length_m),
-        rng.uniform(0, 2 * math.pi),
-    )
+    size = TABLE1["cyclist"].draw(rng)
+    shape = cyclist_shape(x, y, heading, *size, rng.uniform(0, 2 * math.pi))
     return shape, ground_velocity(heading, rng.uniform(2.0, 8.0))
 
 
 def _vehicle(rng: np.random.Generator, cam: CameraModel, x: float, y: float, heading: float):
-    s = TABLE1["vehicle"]
-    shape = vehicle_shape(
-        x,
-        y,
-        heading,
-        uniform(rng, s.width_m),
-        uniform(rng, s.height_m),
-        uniform(rng, s.length_m),
-    )
+    shape = vehicle_shape(x, y, heading, *TABLE1["vehicle"].draw(rng))
     return shape, ground_velocity(heading, rng.uniform(3.0, 16.7))
 
 
