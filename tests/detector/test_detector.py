@@ -16,24 +16,11 @@ from detector.divide import divide_regions
 from detector.features import SCALAR_MAX_REGIONS, region_features
 from detector.segment import Segmenter
 from detector.shapes import cyclist_shape, ground_spot_shape, pedestrian_shape, silhouette_mask
+from tests.detector.cameras import scene_b
 
 H_PX, W_PX = 240, 320
 FPS = 15.0
 WALK_MPS = 1.4
-
-
-def scene_b(**overrides) -> CameraModel:
-    """The paper's scene B camera (Table 2): 3.1 m, 22 deg, 320 x 240, f 0.73 mm, 0.7 x 0.52 mm sensor."""
-    params = dict(
-        height_m=3.1,
-        tilt_deg=22.0,
-        focal_mm=0.73,
-        sensor_w_mm=0.7,
-        sensor_h_mm=0.52,
-        width_px=W_PX,
-        height_px=H_PX,
-    )
-    return CameraModel(**{**params, **overrides})
 
 
 @pytest.fixture(scope="module")

@@ -11,22 +11,10 @@ from detector.detector import Detector
 from detector.divide import DivisionParams, divide_regions, split_at_widening
 from detector.features import region_features
 from detector.segment import contour_boxes_and_areas
+from tests.detector.cameras import scene_b
 
 H_PX, W_PX = 240, 320
 BLOB_BOX = (150, 60, 24, 18)  # x, y, w, h: a car ~25 m away, head-on
-
-
-def scene_b() -> CameraModel:
-    """The paper's scene B camera (Table 2)."""
-    return CameraModel(
-        height_m=3.1,
-        tilt_deg=22.0,
-        focal_mm=0.73,
-        sensor_w_mm=0.7,
-        sensor_h_mm=0.52,
-        width_px=W_PX,
-        height_px=H_PX,
-    )
 
 
 def region(mask: np.ndarray, camera: CameraModel):

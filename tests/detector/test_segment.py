@@ -13,23 +13,11 @@ from detector.divide import DivisionParams, divide_regions, split_object_and_spo
 from detector.features import region_features
 from detector.segment import Regions, Segmenter, SegmenterParams, contour_boxes_and_areas
 from detector.shapes import pedestrian_shape, silhouette_mask
+from tests.detector.cameras import scene_b
 
 H_PX, W_PX = 240, 320
 BACKGROUND_DN = 40.0
 NOISE_DN = 3.0
-
-
-def scene_b() -> CameraModel:
-    """The paper's scene B camera (Table 2)."""
-    return CameraModel(
-        height_m=3.1,
-        tilt_deg=22,
-        focal_mm=0.73,
-        sensor_w_mm=0.7,
-        sensor_h_mm=0.52,
-        width_px=W_PX,
-        height_px=H_PX,
-    )
 
 
 class Scene:

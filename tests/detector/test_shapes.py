@@ -9,7 +9,6 @@ import cv2
 import numpy as np
 import pytest
 
-from detector.camera import CameraModel
 from detector.shapes import (
     animal_shape,
     cyclist_shape,
@@ -18,16 +17,9 @@ from detector.shapes import (
     silhouette_mask,
     vehicle_shape,
 )
+from tests.detector.cameras import scene_b
 
-SCENE_B = CameraModel(
-    height_m=3.1,
-    tilt_deg=22.0,
-    focal_mm=0.73,
-    sensor_w_mm=0.7,
-    sensor_h_mm=0.52,
-    width_px=320,
-    height_px=240,
-)
+SCENE_B = scene_b()
 
 # (width, height, length) corners of the Table 1 boxes
 TABLE1 = {

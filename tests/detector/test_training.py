@@ -21,16 +21,9 @@ from detector.training import (
     make_training_set,
     shape_region,
 )
+from tests.detector.cameras import scene_b
 
-SCENE_B = CameraModel(
-    height_m=3.1,
-    tilt_deg=22.0,
-    focal_mm=0.73,
-    sensor_w_mm=0.7,
-    sensor_h_mm=0.52,
-    width_px=320,
-    height_px=240,
-)
+SCENE_B = scene_b()
 COL = {name: i for i, name in enumerate(FEATURE_NAMES)}
 
 
