@@ -10,17 +10,7 @@ import pytest
 
 from citysim.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from citysim.topdown import FOOTPRINT_RANGE_M, camera_footprint_m, plot_topdown
-from detector.camera import CameraModel
-
-CAMERA = CameraModel(
-    height_m=4.0,
-    tilt_deg=20.0,
-    focal_mm=0.73,
-    sensor_w_mm=0.7,
-    sensor_h_mm=0.52,
-    width_px=320,
-    height_px=240,
-)
+from tests.citysim.test_render import PINHOLE as CAMERA
 
 
 def street() -> Street:
