@@ -12,6 +12,7 @@ import pytest
 import yaml
 
 from citysim.cli import main
+from tests.citysim.streets import two_way_street
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -22,12 +23,7 @@ def tiny(tmp_path: Path, **changes) -> Path:
         "name": "tiny",
         "seed": 3,
         "duration_s": 20.0,
-        "street": {
-            "length_m": 100,
-            "lanes": [{"y_center_m": -1.6, "width_m": 3.2, "direction": 1},
-                      {"y_center_m": 1.6, "width_m": 3.2, "direction": -1}],
-            "sidewalks": [{"y_center_m": -4.3, "width_m": 2.2}, {"y_center_m": 4.3, "width_m": 2.2}],
-        },
+        "street": two_way_street(100),
         "lamps": {"count": 3, "spacing_m": 30, "first_x_m": 20, "y_m": 6.2, "pole_height_m": 4.0,
                   "camera": {"file": "scene_b.yaml", "heading_deg": -10, "tilt_deg": 15}},
         "traffic": {"classes": {"pedestrian": {"rate_per_hour": 600}, "vehicle": {"rate_per_hour": 300}}},

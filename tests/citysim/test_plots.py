@@ -23,20 +23,14 @@ from citysim.report import best_settings, write_report
 from citysim.sim import run_comparison
 from citysim.sweep_results import ResultsFile, flatten_summary
 from citysim.sweep_spec import point_id
+from tests.citysim.streets import two_way_street
 
 REPO = Path(__file__).resolve().parents[2]
 SCENARIO = {
     "name": "tiny_plots",
     "seed": 11,
     "duration_s": 20,
-    "street": {
-        "length_m": 60,
-        "lanes": [
-            {"y_center_m": -1.6, "width_m": 3.2, "direction": 1},
-            {"y_center_m": 1.6, "width_m": 3.2, "direction": -1},
-        ],
-        "sidewalks": [{"y_center_m": -4.3, "width_m": 2.2}, {"y_center_m": 4.3, "width_m": 2.2}],
-    },
+    "street": two_way_street(60),
     "lamps": {
         "count": 2, "spacing_m": 30, "first_x_m": 15, "y_m": 6.2, "pole_height_m": 5.5,
         "camera": {"file": str(REPO / "scenarios" / "cameras" / "scene_a.yaml"), "tilt_deg": 15},

@@ -13,6 +13,7 @@ from citysim.sim import run_controller, seed_streams
 from citysim.street import build_street
 from citysim.traffic import start_traffic
 from citysim.world import World
+from tests.citysim.streets import two_way_street
 
 FPS = 15.0
 
@@ -23,13 +24,9 @@ def tiny_scenario(**changes) -> dict:
         "name": "one_lamp",
         "seed": 7,
         "duration_s": 80.0,
-        "street": {
-            "length_m": 60,
-            "lanes": [{"y_center_m": -1.6, "width_m": 3.2, "direction": 1},
-                      {"y_center_m": 1.6, "width_m": 3.2, "direction": -1}],
-            "sidewalks": [{"y_center_m": -4.3, "width_m": 2.2}, {"y_center_m": 4.3, "width_m": 2.2}],
-            "scenery": {"trees_per_100m": 0, "walls_per_100m": 2, "parked_cars_per_100m": 0, "buildings_per_100m": 2},
-        },
+        "street": two_way_street(
+            60, scenery={"trees_per_100m": 0, "walls_per_100m": 2, "parked_cars_per_100m": 0, "buildings_per_100m": 2}
+        ),
         "lamps": {
             "x_m": [4.0], "y_m": 6.2, "pole_height_m": 4.0,
             "luminaire": {"rated_power_w": 60, "dim_level": 0.2, "standby_power_w": 0.5, "ramp_up_s": 0.3,

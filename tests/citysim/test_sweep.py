@@ -24,6 +24,7 @@ import yaml
 from citysim.report import write_report
 from citysim.sweep import SweepError, load_sweep, run_sweep
 from citysim.sweep_spec import point_id
+from tests.citysim.streets import two_way_street
 
 REPO = Path(__file__).resolve().parents[2]
 CAMERA = REPO / "scenarios" / "cameras" / "scene_a.yaml"
@@ -33,15 +34,7 @@ BASE = {
     "name": "tiny",
     "seed": 7,
     "duration_s": 20,
-    "street": {
-        "length_m": 90,
-        "lanes": [
-            {"y_center_m": -1.6, "width_m": 3.2, "direction": 1},
-            {"y_center_m": 1.6, "width_m": 3.2, "direction": -1},
-        ],
-        "sidewalks": [{"y_center_m": -4.3, "width_m": 2.2}, {"y_center_m": 4.3, "width_m": 2.2}],
-        "crossings_x_m": [45],
-    },
+    "street": two_way_street(90, crossings_x_m=[45]),
     "lamps": {
         "count": 3, "spacing_m": 30, "first_x_m": 15, "y_m": 6.2, "pole_height_m": 5.5,
         "camera": {"file": str(CAMERA), "tilt_deg": 15, "heading_deg": -8},
