@@ -13,19 +13,12 @@ from detector.features import (
     estimated_width_m,
     region_features,
 )
+from tests.detector.cameras import scene_b
 
 
 def camera(**overrides) -> CameraModel:
-    params = dict(
-        height_m=3.1,
-        tilt_deg=8.0,
-        focal_mm=0.73,
-        sensor_w_mm=0.7,
-        sensor_h_mm=0.52,
-        width_px=320,
-        height_px=240,
-    )
-    return CameraModel(**{**params, **overrides})
+    """The scene B camera tilted only 8 deg."""
+    return scene_b(**{"tilt_deg": 8.0, **overrides})
 
 
 def random_boxes(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
