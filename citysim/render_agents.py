@@ -112,7 +112,8 @@ def part_radiance(
     lighting: AgentLighting,
 ) -> np.ndarray:
     """Parts' radiance from their centres in the camera frame (N, 3; the emitter's view) and
-    the world (N, 3; the lamps' view) and their reflectances (N,)."""
+    the world (N, 3; the lamps' view) and their reflectances (N,): the plain numpy statement
+    of what ``render_kernels.pose_parts`` computes per part (tests hold the two equal)."""
     r2 = np.einsum("ij,ij->i", cam_centres_m, cam_centres_m)
     cos_axis = np.maximum(cam_centres_m[:, 2], 0.0) / np.sqrt(np.maximum(r2, 1e-12))
     irr = lighting.emitter_gain * cos_axis**light.BEAM_EXPONENT / np.maximum(r2, 0.04)

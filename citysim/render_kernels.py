@@ -222,8 +222,9 @@ def paint_smeared(
 def _lamp_light_on_body(
     px, py, pz, lamp_pos, lamp_level, power, cutoff_cos, spread_cos
 ):  # pragma: no cover
-    """Irradiance on a small upright body at (px, py, pz) from the lamps (as
-    ``render_light.lamp_irradiance`` with ``normals=None``, summed over lamps by level)."""
+    """Irradiance on a small upright body at (px, py, pz) from the lamps: the formula of
+    ``render_light.lamp_irradiance`` with ``normals=None``, summed over lamps by level
+    (tests/citysim/test_render_kernels.py holds the two equal)."""
     total = 0.0
     for lamp in range(len(lamp_level)):
         vx = lamp_pos[lamp, 0] - px
