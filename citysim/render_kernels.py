@@ -140,19 +140,45 @@ def label_stats(labels, frame_u, frame_v, shown_at, wanted, rois, out):  # pragm
             fy1 = min(max(int(math.ceil(v_hi)) + 3, 0), fh)
         else:
             fx0, fy0, fx1, fy1 = cx0, cy0, cx1 + 1, cy1 + 1
-        bx0, by0, bx1, by1 = fw, fh, -1, -1
+        # the box's edges, each found by scanning inward from the search box's side
+        by0 = -1
         for y in range(fy0, fy1):
             for x in range(fx0, fx1):
                 if flat[shown_at[y, x]] == label:
-                    bx0 = min(bx0, x)
-                    bx1 = max(bx1, x)
-                    by0 = min(by0, y)
-                    by1 = max(by1, y)
-        if bx1 >= 0:
-            out[a, 1] = bx0
-            out[a, 2] = by0
-            out[a, 3] = bx1 + 1
-            out[a, 4] = by1 + 1
+                    by0 = y
+                    break
+            if by0 >= 0:
+                break
+        if by0 < 0:
+            continue
+        by1 = by0
+        for y in range(fy1 - 1, by0, -1):
+            for x in range(fx0, fx1):
+                if flat[shown_at[y, x]] == label:
+                    by1 = y
+                    break
+            if by1 > by0:
+                break
+        bx0 = -1
+        for x in range(fx0, fx1):
+            for y in range(by0, by1 + 1):
+                if flat[shown_at[y, x]] == label:
+                    bx0 = x
+                    break
+            if bx0 >= 0:
+                break
+        bx1 = bx0
+        for x in range(fx1 - 1, bx0, -1):
+            for y in range(by0, by1 + 1):
+                if flat[shown_at[y, x]] == label:
+                    bx1 = x
+                    break
+            if bx1 > bx0:
+                break
+        out[a, 1] = bx0
+        out[a, 2] = by0
+        out[a, 3] = bx1 + 1
+        out[a, 4] = by1 + 1
 
 
 @njit(cache=True, nogil=True)
