@@ -93,16 +93,7 @@ class AgentLighting:
     @property
     def constants(self) -> np.ndarray:
         """What ``render_kernels.pose_parts`` takes as ``light``."""
-        return np.array(
-            [
-                self.emitter_gain,
-                self.uniform_irradiance,
-                light.BEAM_EXPONENT,
-                light.LAMP_POWER,
-                light.LAMP_CUTOFF_COS,
-                light.SPREAD_COS,
-            ]
-        )
+        return np.array([self.emitter_gain, self.uniform_irradiance, light.BEAM_EXPONENT])
 
 
 def part_radiance(

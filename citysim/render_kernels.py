@@ -19,6 +19,8 @@ import math
 import numpy as np
 from numba import njit
 
+from citysim.render_light import lamp_light
+
 SUBPIXEL_BITS = 4
 _ONE = 1 << SUBPIXEL_BITS
 
@@ -243,30 +245,6 @@ def paint_smeared(
                             labels[y, x] = now
 
 
-#: Street-lamp radiometry (``citysim.render_light``), passed in so the loops need no globals.
-@njit(cache=True, nogil=True)
-def _lamp_light_on_body(
-    px, py, pz, lamp_pos, lamp_level, power, cutoff_cos, spread_cos
-):  # pragma: no cover
-    """Irradiance on a small upright body at (px, py, pz) from the lamps: the formula of
-    ``render_light.lamp_irradiance`` with ``normals=None``, summed over lamps by level
-    (tests/citysim/test_render_kernels.py holds the two equal)."""
-    total = 0.0
-    for lamp in range(len(lamp_level)):
-        vx = lamp_pos[lamp, 0] - px
-        vy = lamp_pos[lamp, 1] - py
-        vz = lamp_pos[lamp, 2] - pz
-        d2 = max(vx * vx + vy * vy + vz * vz, 0.25)
-        d = math.sqrt(d2)
-        cos_nadir = vz / d
-        fade = min(max(cos_nadir * (1.0 / cutoff_cos), 0.0), 1.0)
-        spread = max(cos_nadir, spread_cos)
-        fade /= spread * spread
-        cos_surface = 0.5 + 0.5 * max(cos_nadir, 0.0)
-        total += lamp_level[lamp] * power * fade * cos_surface / d2
-    return total
-
-
 @njit(cache=True, nogil=True)
 def pose_parts(
     geometry,
@@ -301,8 +279,8 @@ def pose_parts(
     x, y (m), heading (rad), height (m), speed (m/s); ``rot`` (3, 3) world -> camera;
     ``pole`` (3,) camera position (m); ``camera_px`` (fx, fy, cx, cy) on the canvas;
     ``table`` (T, 2**F, K) outline tables (``render_outline``); ``reflectance`` (P,);
-    ``light`` (emitter gain, uniform irradiance, beam exponent, lamp power, lamp cut-off
-    cosine, lamp spread cosine); ``lamp_pos`` (L, 3) and ``lamp_level`` (L,) the lit lamps;
+    ``light`` (emitter gain, uniform irradiance, beam exponent; ``AgentLighting.constants``);
+    ``lamp_pos`` (L, 3) and ``lamp_level`` (L,) the lit lamps (``render_light.lamp_light``);
     ``canvas_wh`` (w, h).
 
     Outputs: ``cam_pts`` (P, K, 3) camera-frame vertices; ``polys`` (P, K, 2) int32 fixed-point
@@ -368,9 +346,16 @@ def pose_parts(
                     wx = rot[0, 0] * qx + rot[1, 0] * qy + rot[2, 0] * qz + pole[0]
                     wy = rot[0, 1] * qx + rot[1, 1] * qy + rot[2, 1] * qz + pole[1]
                     wz = rot[0, 2] * qx + rot[1, 2] * qy + rot[2, 2] * qz + pole[2]
-                    irr += _lamp_light_on_body(
-                        wx, wy, wz, lamp_pos, lamp_level, light[3], light[4], light[5]
-                    )
+                    for lamp in range(len(lamp_level)):
+                        irr += lamp_level[lamp] * lamp_light(
+                            lamp_pos[lamp, 0] - wx,
+                            lamp_pos[lamp, 1] - wy,
+                            lamp_pos[lamp, 2] - wz,
+                            0.0,
+                            0.0,
+                            0.0,
+                            True,
+                        )
                 radiance[p] = np.float32(reflectance[p] * irr)
         # which faces look at the camera (at -shift in the rotated model frame) -> outline
         mask = 0

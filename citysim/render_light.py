@@ -28,8 +28,11 @@ Conventions: world frame of DESIGN.md (m), unit normals, distances in metres.
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
+from numba import njit, vectorize
 
 #: Irradiance x m^2 of a street lamp at level 1 (full-scale units): under a
 #: 6 m pole a 0.25-reflectance road reads about 95 DN (a walker beside it ~190 DN).
@@ -82,31 +85,54 @@ def sky_radiance(ambient_light: float) -> float:
     return SKY_NIGHT + ambient_light * (SKY_DAY - SKY_NIGHT)
 
 
+@njit(cache=True, nogil=True)
+def lamp_light(vx, vy, vz, nx, ny, nz, upright):  # pragma: no cover - compiled
+    """Irradiance from a street lamp at level 1 at a surface point, ``(vx, vy, vz)`` m from
+    the point to the luminaire; the surface's unit normal ``(nx, ny, nz)``, or ``upright``
+    for a small upright body (person, car), which catches light about as well from every
+    side: its cosine is taken as 0.5 plus half the lamp's elevation seen from the point.
+    The one statement of the lamps' light: the background (``lamp_irradiance``) and the
+    agents (``render_kernels.pose_parts``) both use it."""
+    d2 = max(vx * vx + vy * vy + vz * vz, 0.25)
+    d = math.sqrt(d2)
+    cos_nadir = vz / d  # angle from the lamp's downward axis
+    fade = min(max(cos_nadir * (1.0 / LAMP_CUTOFF_COS), 0.0), 1.0)
+    spread = max(cos_nadir, SPREAD_COS)
+    fade /= spread * spread
+    if upright:
+        cos_surface = 0.5 + 0.5 * max(cos_nadir, 0.0)
+    else:
+        cos_surface = min(max((vx * nx + vy * ny + vz * nz) / d, 0.0), 1.0)
+    return LAMP_POWER * fade * cos_surface / d2
+
+
+@vectorize(
+    ["float64(float64, float64, float64, float64, float64, float64, boolean)"],
+    cache=True,
+    nopython=True,
+)
+def _lamp_light_ufunc(vx, vy, vz, nx, ny, nz, upright):  # pragma: no cover - compiled
+    return lamp_light(vx, vy, vz, nx, ny, nz, upright)
+
+
 def lamp_irradiance(
     points_m: np.ndarray, normals: np.ndarray | None, lamp_positions_m: np.ndarray
 ) -> np.ndarray:
-    """(N, 3) surface points -> (N, L) irradiance from L lamps at level 1.
+    """(N, 3) surface points -> (N, L) irradiance from L lamps at level 1 (``lamp_light``).
 
-    ``normals`` (N, 3) unit vectors, or None for small upright bodies (people,
-    cars), which catch light about as well from every side: their cosine is
-    taken as 0.5 plus half the lamp's elevation seen from the point.
+    ``normals`` (N, 3) unit vectors, or None for small upright bodies.
     Occlusion (shadows) is not modelled.
     """
     pts = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
     lamps = np.asarray(lamp_positions_m, dtype=np.float64).reshape(-1, 3)
     v = lamps[None, :, :] - pts[:, None, :]
-    d2 = np.maximum(np.einsum("nlk,nlk->nl", v, v), 0.25)
-    d = np.sqrt(d2)
-    cos_nadir = v[..., 2] / d  # angle from the lamp's downward axis
-    # (np.minimum / np.maximum rather than np.clip: the same numbers, a fraction of the call cost)
-    fade = np.minimum(np.maximum(cos_nadir * (1.0 / LAMP_CUTOFF_COS), 0.0), 1.0)
-    fade /= np.square(np.maximum(cos_nadir, SPREAD_COS))
     if normals is None:
-        cos_surface = 0.5 + 0.5 * np.maximum(cos_nadir, 0.0)  # cos_nadir <= 1
+        n = np.zeros((len(pts), 1, 3))
     else:
-        n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
-        cos_surface = np.clip(np.einsum("nlk,nk->nl", v, n) / d, 0.0, 1.0)
-    return LAMP_POWER * fade * cos_surface / d2
+        n = np.asarray(normals, dtype=np.float64).reshape(-1, 1, 3)
+    return _lamp_light_ufunc(
+        v[..., 0], v[..., 1], v[..., 2], n[..., 0], n[..., 1], n[..., 2], normals is None
+    )
 
 
 def radiance_to_dn(radiance: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:

@@ -223,3 +223,24 @@ def test_merged_boxes_cover_their_inputs_and_leave_nothing_worth_joining() -> No
         for c0, d0, c1, d1 in merged[i + 1 :]:
             joint = (max(a1, c1) - min(a0, c0)) * (max(b1, d1) - min(b0, d0))
             assert joint > (a1 - a0) * (b1 - b0) + (c1 - c0) * (d1 - d0) + BOX_COST_PX
+
+
+def test_lamp_light_on_the_road_falls_as_the_cosine_of_the_angle_from_the_nadir() -> None:
+    from citysim.render_light import LAMP_POWER, LAMP_SPREAD_DEG, lamp_irradiance
+
+    h_m = 6.0
+    x_m = np.array([0.0, 2.0, 5.0, 10.0, 20.0])
+    road = np.column_stack([x_m, np.zeros(5), np.zeros(5)])
+    up = np.tile([0.0, 0.0, 1.0], (5, 1))
+    e = lamp_irradiance(road, up, np.array([[0.0, 0.0, h_m]]))[:, 0]
+    cos_theta = h_m / np.hypot(h_m, x_m)
+    # intensity P / cos^2 out to the spread angle: illuminance P cos(theta) / h^2 on the road
+    inside = np.degrees(np.arccos(cos_theta)) <= LAMP_SPREAD_DEG
+    np.testing.assert_allclose(e[inside], LAMP_POWER * cos_theta[inside] / h_m**2, rtol=1e-12)
+    assert np.all(e[~inside] < LAMP_POWER * cos_theta[~inside] / h_m**2)  # beyond: cut off
+    # a wall facing away from the lamp gets nothing
+    away = lamp_irradiance(road[1:2], np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 0.0, h_m]]))
+    assert away[0, 0] == 0.0
+    # an upright body under the lamp: cosine 0.5 + half the lamp's elevation (1 overhead)
+    body = lamp_irradiance(np.array([[0.0, 0.0, 1.0]]), None, np.array([[0.0, 0.0, h_m]]))
+    assert body[0, 0] == pytest.approx(LAMP_POWER / (h_m - 1.0) ** 2)
