@@ -154,6 +154,7 @@ def bench_render() -> dict:
         warm = CameraRenderer(camera, street, RenderParams(), np.random.default_rng(1))
         for k in range(160):
             warm.render(k / camera.fps, bench_agents(n, k / camera.fps), levels)
+        del warm
         renderer = CameraRenderer(camera, street, RenderParams(), np.random.default_rng(0))
         detector = Detector(camera, model=default_model())
         render_s = detect_s = 0.0
