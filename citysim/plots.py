@@ -172,7 +172,8 @@ def bars_per_hour(per_hour: dict[str, list[float]], start_hour: float | None, du
     if duration_s is not None and duration_s % 3600 > 1e-6:
         title += f"\n(the last hour is partial: the run lasts {duration_s / 60:.3g} min)"
     ax.set_title(title)
-    ax.legend(title="controller", fontsize=8)
+    # beside the bars, not over them (a short run has one hour of tall bars)
+    ax.legend(title="controller", fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(axis="y", alpha=0.3)
     return save(fig, path)
 
