@@ -128,7 +128,7 @@ class PosedParts:
     radiance: np.ndarray  # (P,) float32
     part_dist: np.ndarray  # (P,) squared distance of each part centre, m^2
     agent_z: np.ndarray  # (N, 2) nearest and farthest vertex depth, m
-    view: np.ndarray  # (N, 8) distance, image motion, canvas box, shown
+    view: np.ndarray  # (N, 7) distance, image motion, canvas box (empty: out of view)
 
 
 class AgentPainter:
@@ -164,7 +164,7 @@ class AgentPainter:
             radiance=np.empty(n_total, np.float32),
             part_dist=np.empty(n_total),
             agent_z=np.empty((n, 2)),
-            view=np.empty((n, 8)),
+            view=np.empty((n, 7)),
         )
         needs_hull = np.empty(n_total, np.bool_)
         pose_parts(
@@ -232,16 +232,15 @@ class AgentPainter:
         for i in straddle:
             parts, lo, hi = self._clipped_polygons(cam_pts[order[starts[i] : starts[i + 1]]])
             clipped[i] = parts
-            view[i, 3:7] = box = agent_box(
-                np.array(lo + hi), view[i, 1], view[i, 2], MIN_BLUR_PX, w, h
-            )
-            view[i, 7] = float(box[2] > box[0] and box[3] > box[1])
+            view[i, 3:7] = agent_box(np.array(lo + hi), view[i, 1], view[i, 2], MIN_BLUR_PX, w, h)
             if not parts:
                 behind.add(i)
         dist = view[:, 0].tolist()
         motion = [tuple(m) for m in view[:, 1:3].tolist()]
         rois = [tuple(r) for r in view[:, 3:7].astype(np.int64).tolist()]
-        shown = [i for i in np.flatnonzero(view[:, 7] > 0).tolist() if i not in behind]
+        shown = [
+            i for i, (x0, y0, x1, y1) in enumerate(rois) if x1 > x0 and y1 > y0 and i not in behind
+        ]
         if not shown:
             return [], boxes
         cut = [False] * n

@@ -52,7 +52,7 @@ class Canvas:
     #: (u, v) each (H, W) float32: frame position (distorted) of each canvas pixel; None when frame == canvas
     frame_uv: tuple[np.ndarray, np.ndarray] | None = None
     #: (H, W, 2) int16 map for ``cv2.remap`` frame <- canvas, each frame pixel's nearest canvas
-    #: pixel (a nearest remap needs no interpolation table: half the cost)
+    #: pixel (labels are remapped by it: ``frame_to_canvas_index``)
     nearest_map: np.ndarray | None = None
 
     @property
@@ -150,24 +150,12 @@ class Canvas:
     def _frame_uv_stacked(self) -> np.ndarray:
         return np.stack(self.frame_uv, axis=-1)
 
-    def remap_box(
-        self, canvas_img: np.ndarray, box: Sequence[int], out: np.ndarray, nearest: bool = False
-    ) -> None:
+    def remap_box(self, canvas_img: np.ndarray, box: Sequence[int], out: np.ndarray) -> None:
         """Write the frame box ``box`` (x0, y0, x1, y1) of ``to_frame(canvas_img)`` into the
         same box of ``out`` (frame size), computing only that box."""
         x0, y0, x1, y1 = box
         if self.remap_maps is None:
             out[y0:y1, x0:x1] = canvas_img[y0:y1, x0:x1]
-            return
-        if nearest:
-            cv2.remap(
-                canvas_img,
-                self.nearest_map[y0:y1, x0:x1],
-                None,
-                cv2.INTER_NEAREST,
-                dst=out[y0:y1, x0:x1],
-                borderMode=cv2.BORDER_REPLICATE,
-            )
             return
         cv2.remap(
             canvas_img,

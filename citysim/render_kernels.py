@@ -287,16 +287,15 @@ def pose_parts(
     outlines (the image's convex polygon, from the table by which faces look at the camera);
     ``needs_hull`` (P,) parts without a table entry (the caller takes their hull);
     ``radiance`` (P,) float32; ``part_dist`` (P,) squared distance of the part centre;
-    ``agent_z`` (N, 2) nearest and farthest vertex depth; ``agent_view`` (N, 8): distance of the
+    ``agent_z`` (N, 2) nearest and farthest vertex depth; ``agent_view`` (N, 7): distance of the
     body centre (m), image motion over the exposure du, dv (px), canvas box x0, y0, x1, y1
-    (exclusive ends, blur margin in), and 1.0 if the box is not empty.
+    (exclusive ends, blur margin in; empty when the agent is out of view).
     """
     n_parts, n_vert = cam_pts.shape[0], cam_pts.shape[1]
     n_faces = faces.shape[1] - 1
     n = pose.shape[0]
     fx, fy, cx, cy = camera_px[0], camera_px[1], camera_px[2], camera_px[3]
     w, h = canvas_wh[0], canvas_wh[1]
-    one = 1 << SUBPIXEL_BITS
     to_cam = np.empty((n, 3, 3))
     shift = np.empty((n, 3))
     for a in range(n):
@@ -317,7 +316,6 @@ def pose_parts(
         agent_view[a, 5] = -np.inf
         agent_view[a, 6] = -np.inf
     uv = np.empty((n_vert, 2))
-    normal = np.empty(3)
     for p in range(n_parts):
         a = owner[p]
         m = to_cam[a]
@@ -360,14 +358,14 @@ def pose_parts(
         # which faces look at the camera (at -shift in the rotated model frame) -> outline
         mask = 0
         for f in range(n_faces):
+            gx, gy, gz = (
+                geometry[p, n_vert + 1 + f, 0],
+                geometry[p, n_vert + 1 + f, 1],
+                geometry[p, n_vert + 1 + f, 2],
+            )
+            facing = 0.0  # the face normal in the camera frame . shift
             for i in range(3):
-                gx, gy, gz = (
-                    geometry[p, n_vert + 1 + f, 0],
-                    geometry[p, n_vert + 1 + f, 1],
-                    geometry[p, n_vert + 1 + f, 2],
-                )
-                normal[i] = m[i, 0] * gx + m[i, 1] * gy + m[i, 2] * gz
-            facing = normal[0] * shift[a, 0] + normal[1] * shift[a, 1] + normal[2] * shift[a, 2]
+                facing += (m[i, 0] * gx + m[i, 1] * gy + m[i, 2] * gz) * shift[a, i]
             if facing < -faces[p, 1 + f]:
                 mask |= 1 << f
         row = int(faces[p, 0])
@@ -377,8 +375,8 @@ def pose_parts(
         needs_hull[p] = hull
         for k in range(n_vert):
             j = k if hull else table[row, mask, k]
-            polys[p, k, 0] = np.int32(round(uv[j, 0] * one))
-            polys[p, k, 1] = np.int32(round(uv[j, 1] * one))
+            polys[p, k, 0] = np.int32(round(uv[j, 0] * _ONE))
+            polys[p, k, 1] = np.int32(round(uv[j, 1] * _ONE))
     # per agent: the body centre now and an exposure ago (back along its heading), its box
     for a in range(n):
         half_h = 0.5 * pose[a, 3]
@@ -396,8 +394,6 @@ def pose_parts(
             dv = fy * (py / pz - ny / nz)
         agent_view[a, 1], agent_view[a, 2] = du, dv
         agent_view[a, 3:7] = agent_box(agent_view[a, 3:7], du, dv, min_blur_px, w, h)
-        x0, y0, x1, y1 = agent_view[a, 3], agent_view[a, 4], agent_view[a, 5], agent_view[a, 6]
-        agent_view[a, 7] = 1.0 if (x1 > x0 and y1 > y0) else 0.0
 
 
 @njit(cache=True, nogil=True)
