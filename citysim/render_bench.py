@@ -1,7 +1,9 @@
 """Rendering cost per frame: a fixed suburban street, 320x240, 0/5/20 agents.
 
-``bench_render()`` is what the benchmark runner calls; ``python -m
-citysim.render_bench`` prints the same numbers. The scene is built here by
+``make bench`` (``experiments.bench.bench_render``) times these frames
+interleaved with the detector; ``bench_render()`` here, printed by ``python -m
+citysim.render_bench``, times the renderer alone (median wall time, a quick
+check while working on it). The scene is built here by
 hand (two lanes, two sidewalks, a lamp chain, walls, trees, a parked car) so
 the figure does not depend on any scenario file. Every frame has noise,
 motion blur, lens distortion, lamp light and swaying crowns on - the default

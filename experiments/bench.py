@@ -166,7 +166,7 @@ def bench_render() -> dict:
             t1 = time.process_time()
             detector.process(image)
             t2 = time.process_time()
-            if k >= 10:  # the first frames warm caches (kernels, spot textures, MOG2)
+            if k >= 10:  # the first frames build MOG2's model and the still view's cache
                 render_s += t1 - t0
                 detect_s += t2 - t1
         out[n] = dict(render_ms=1000 * render_s / frames, detect_ms=1000 * detect_s / frames)
