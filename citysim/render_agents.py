@@ -37,7 +37,7 @@ import numpy as np
 
 from citysim import render_light as light
 from citysim.agents import AgentState
-from citysim.render_blur import MIN_BLUR_PX, _smear
+from citysim.render_blur import MIN_BLUR_PX
 from citysim.render_canvas import Z_NEAR_M, BoxMinimum, Canvas, clip_solid_near
 from citysim.render_clusters import PaintFrame, clusters, composite
 from citysim.render_kernels import SUBPIXEL_BITS, agent_box, clear_boxes, fill_ranks, pose_parts
@@ -48,7 +48,7 @@ from detector.shape_parts import VERTICES_PER_PART
 #: Clothes, paint and fur face the camera at varied angles; one mean incidence cosine.
 MEAN_INCIDENCE_COS = 0.8
 
-__all__ = ["AgentLighting", "AgentPainter", "DrawnAgent", "part_radiance", "_smear"]
+__all__ = ["AgentLighting", "AgentPainter", "DrawnAgent", "part_radiance"]
 
 
 @dataclass(frozen=True)

@@ -10,8 +10,8 @@ import pytest
 
 from citysim.agents import AgentState, MemberState
 from citysim.render import CameraRenderer, RenderParams
-from citysim.render_agents import _smear
 from citysim.render_bench import bench_render
+from citysim.render_blur import _smear
 from citysim.render_models import agent_shape
 from citysim.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from detector.camera import CameraModel
