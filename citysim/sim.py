@@ -24,6 +24,7 @@ import csv
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import simpy
@@ -33,10 +34,12 @@ from citysim.control import CONTROLLERS, ControlContext
 from citysim.lamps import Lamp, LuminaireSpec, always_on_energy_j
 from citysim.metrics import DetectionConfusion, ZoneTracker, energy_summary
 from citysim.network import LinkSpec, Network
-from citysim.render import CameraRenderer, RenderParams
 from citysim.street import Street, build_street
 from citysim.traffic import start_traffic
 from citysim.world import World
+
+if TYPE_CHECKING:
+    from citysim.render import CameraRenderer, RenderParams
 
 LAMPS_CSV_HEADER = ["controller", "t_s", "lamp", "level", "power_w"]
 OBJECTS_CSV_HEADER = ["controller", "object_id", "cls", "lamp", "t_enter_s", "t_exit_s", "lag_s", "dark_s", "lit_on_entry"]
@@ -63,6 +66,8 @@ def luminaire_of(scenario: Scenario, controller: ControllerSpec) -> LuminaireSpe
 
 
 def render_params_of(scenario: Scenario) -> RenderParams:
+    from citysim.render import RenderParams
+
     env = scenario.environment
     return RenderParams(
         ambient_light=0.0 if scenario.night else 1.0,
@@ -249,6 +254,9 @@ def run_controller(
 
     env.process(physics())
     if controller_cls.uses_camera:
+        # imported here: the renderer loads numba (~150 MB), which light controllers never need
+        from citysim.render import CameraRenderer
+
         params = render_params_of(scenario)
         render_rngs = rngs["render"].spawn(len(street.lamps))
         renderers = [CameraRenderer(site.camera, street, params, rng) for site, rng in zip(street.lamps, render_rngs, strict=True)]
