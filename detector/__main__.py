@@ -97,14 +97,21 @@ def general_model_covers(camera: CameraModel) -> bool:
     return lo_h <= camera.height_m <= hi_h and lo_t <= camera.tilt_deg <= hi_t and view_range_m(camera) >= config.min_view_range_m
 
 
-def train_camera(camera_file: Path, out_path: Path, seed: int = 0) -> Path:
-    """Train a model specialised to one camera and write it atomically to out_path."""
-    from detector.classifier import train_camera_model
+def train_camera(camera_file: Path | None, out_path: Path, seed: int = 0) -> Path:
+    """Train a model and write it atomically to out_path: specialised to one camera, or
+    (camera_file None) the general model over the Table 2 range of cameras, as shipped."""
+    from detector.classifier import DEFAULT_N_PER_CLASS, train_camera_model, train_general_model
 
-    camera = CameraModel.from_yaml(camera_file)
-    model = train_camera_model(camera, seed=seed)
+    training = {"seed": seed, "n_per_class": DEFAULT_N_PER_CLASS}
+    if camera_file is None:
+        model = train_general_model(seed=seed)
+        training["cameras"] = "general (random cameras 2-10 m high, 0-80 deg tilt)"
+    else:
+        camera = CameraModel.from_yaml(camera_file)
+        model = train_camera_model(camera, seed=seed)
+        training["cameras"] = str(camera_file)
     with staged_output(out_path.parent) as stage:
-        model.save(stage / out_path.name)
+        model.save(stage / out_path.name, training=training)
     return out_path
 
 
@@ -123,8 +130,11 @@ def _detect_parser() -> argparse.ArgumentParser:
 
 
 def _train_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m detector train", description="Train a classifier specialised to one camera.")
-    p.add_argument("--camera", type=Path, required=True)
+    p = argparse.ArgumentParser(prog="python -m detector train", description="Train a classifier "
+                                "specialised to one camera, or without --camera the general model "
+                                "(the shipped detector/models/general.joblib is seed 0).")
+    p.add_argument("--camera", type=Path, default=None,
+                   help="camera YAML to specialise to (default: none, the general model)")
     p.add_argument("--out", type=Path, required=True, help="model file to write (.joblib)")
     p.add_argument("--seed", type=int, default=0)
     return p

@@ -161,17 +161,31 @@ class DimensionalClassifier(ClassifierMixin, BaseEstimator):
         return 1.0 - self.predict_proba(X)[:, noise_col]
 
     # ---------------------------------------------------------------- files
-    def save(self, path: str | Path) -> Path:
-        """Write the fitted model (with the scikit-learn version that wrote it) to ``path``."""
+    def save(self, path: str | Path, training: dict | None = None) -> Path:
+        """Write the fitted model to ``path`` with how it was made: ``training`` (e.g. seed,
+        samples per class, camera) and the library versions that trained it, so a model that
+        behaves differently elsewhere can be traced to its optimiser's numbers."""
         check_is_fitted(self, "pipeline_")
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         joblib.dump(
-            {"format": MODEL_FORMAT, "sklearn_version": sklearn.__version__, "model": self},
+            {
+                "format": MODEL_FORMAT,
+                "sklearn_version": sklearn.__version__,
+                "training": dict(training or {}),
+                "library_versions": library_versions(),
+                "model": self,
+            },
             path,
             compress=3,
         )
         return path
+
+    @staticmethod
+    def provenance(path: str | Path) -> dict:
+        """What a model file says about its training: ``training`` and ``library_versions``."""
+        data = joblib.load(path)
+        return {"training": data.get("training", {}), "library_versions": data.get("library_versions", {})}
 
     @classmethod
     def load(cls, path: str | Path) -> DimensionalClassifier:
@@ -202,6 +216,21 @@ class DimensionalClassifier(ClassifierMixin, BaseEstimator):
                 "retrain it (python -m detector train)"
             )
         return data["model"]
+
+
+def library_versions() -> dict[str, str]:
+    """Versions of what decides a fitted model's numbers (the optimiser runs on numpy/scipy BLAS)."""
+    import platform
+
+    import scipy
+
+    return {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "scikit-learn": sklearn.__version__,
+        "machine": platform.machine(),
+    }
 
 
 def train_general_model(

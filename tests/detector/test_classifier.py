@@ -57,12 +57,34 @@ def test_general_model_target_vs_noise_rates(held_out) -> None:
 
 
 def test_shipped_model_is_what_the_code_trains(held_out) -> None:
+    """The shipped file behaves as a fresh training does, within what another CPU changes.
+
+    The optimiser stops once its gradient is small, and another machine's BLAS sums in
+    another order, so it stops at a slightly different point of a flat optimum: measured
+    across CPUs, probabilities moved by up to 0.049 while the class only changed for points
+    sitting on a decision boundary. So: the same class on >= 99.5% of a held-out set, no
+    probability off by more than 0.10 (twice the largest move seen), and a mean move under
+    0.01 (a model trained on other data moves it by several times that; see below).
+    """
     shipped = DimensionalClassifier.load(GENERAL_MODEL_PATH)
     fresh = train_general_model(seed=0)
-    assert np.allclose(
-        shipped.predict_proba(held_out.X), fresh.predict_proba(held_out.X), atol=1e-6
-    )
+    same_class = np.mean(shipped.predict(held_out.X) == fresh.predict(held_out.X))
+    moved = np.abs(shipped.predict_proba(held_out.X) - fresh.predict_proba(held_out.X))
+    print(f"\nsame class {same_class:.4f}, probability moved max {moved.max():.4f} mean {moved.mean():.5f}")
+    assert same_class >= 0.995
+    assert moved.max() <= 0.10
+    assert moved.mean() <= 0.01
+    # the tolerance can fail: a model trained on another seed does not pass it
+    other = train_general_model(seed=1, n_per_class=200)
+    assert np.abs(shipped.predict_proba(held_out.X) - other.predict_proba(held_out.X)).mean() > 0.01
     assert default_model() is default_model()  # cached per process
+
+
+def test_shipped_model_records_how_it_was_trained() -> None:
+    made = DimensionalClassifier.provenance(GENERAL_MODEL_PATH)
+    assert made["training"]["seed"] == 0
+    assert made["training"]["n_per_class"] > 0
+    assert {"numpy", "scipy", "scikit-learn", "python"} <= set(made["library_versions"])
 
 
 def test_probabilities_follow_classes_order(small_model, held_out) -> None:
