@@ -1,4 +1,4 @@
-"""`citysim run | render | sweep | detect | bench | plot`: the planner's command line.
+"""`citysim run | render | sweep | detect | plot`: the planner's command line.
 
 Errors a user can cause print one line naming the file or field and what is
 valid, and exit with code 2; nothing half-written is left behind.
@@ -14,14 +14,14 @@ USAGE_EXIT = 2
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
-    from citysim.config import ScenarioError
-    from citysim.sim import RunError
+    from citysim.config.scenario import ScenarioError
+    from citysim.sim.loop import RunError
     from detector.camera import CameraError
     from detector.video import VideoError
 
     errors = [ScenarioError, RunError, CameraError, VideoError]
     try:
-        from citysim.sweep import SweepError
+        from citysim.sweep.runner import SweepError
 
         errors.append(SweepError)
     except ImportError:
@@ -30,8 +30,8 @@ def _user_errors() -> tuple[type[BaseException], ...]:
 
 
 def cmd_run(args) -> int:
-    from citysim.compare import default_workers, run_comparison
-    from citysim.config import load_scenario, override
+    from citysim.sim.compare import default_workers, run_comparison
+    from citysim.config.scenario import load_scenario, override
 
     scenario = load_scenario(args.scenario)
     updates = {}
@@ -67,8 +67,8 @@ def comparison_table(summary: dict) -> str:
 
 
 def cmd_render(args) -> int:
-    from citysim.camera_clip import render_clip
-    from citysim.config import load_scenario
+    from citysim.report.clip import render_clip
+    from citysim.config.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
     stats = render_clip(scenario, args.lamp, args.duration, args.out, detect=args.detect, lamps_full=args.lamps_full,
@@ -80,7 +80,7 @@ def cmd_render(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from citysim.sweep import run_sweep
+    from citysim.sweep.runner import run_sweep
 
     counts = run_sweep(args.sweep, args.out, scheduler=args.scheduler, workers=args.workers,
                        progress=not args.no_progress)
@@ -91,8 +91,8 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_plot(args) -> int:
-    from citysim import plots
-    from citysim.report import write_report
+    from citysim.report import run_plots as plots
+    from citysim.report.html import write_report
 
     folder = Path(args.dir)
     if (folder / "results.csv").exists():
@@ -100,7 +100,7 @@ def cmd_plot(args) -> int:
     elif (folder / "summary.json").exists():
         paths = plots.plot_run(folder)
     else:
-        from citysim.sim import RunError
+        from citysim.sim.loop import RunError
 
         raise RunError(f"{folder}: neither a run folder (summary.json) nor a sweep folder (results.csv)")
     report = write_report(folder)
@@ -115,12 +115,6 @@ def cmd_detect(args) -> int:
     if args.model:
         argv += ["--model", str(args.model)]
     return detector_main(argv)
-
-
-def cmd_bench(args) -> int:
-    from experiments.bench import main as bench_main
-
-    return bench_main()
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -162,8 +156,6 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--model", type=Path)
     d.set_defaults(func=cmd_detect)
 
-    b = sub.add_parser("bench", help="speed and memory figures")
-    b.set_defaults(func=cmd_bench)
 
     pl = sub.add_parser("plot", help="plots and report.html for a run or sweep folder")
     pl.add_argument("dir", type=Path)

@@ -10,11 +10,11 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.render import TruthObject
+from citysim.render.camera import TruthObject
 from detector.classifier import CLASSES
 from detector.detector import Detection
 from detector.segment import Regions
-from experiments.paper_metrics import (
+from experiments.paper.metrics import (
     VARIANTS,
     Rows,
     confusions,
@@ -23,14 +23,14 @@ from experiments.paper_metrics import (
     tpr_by_distance,
     window_detection,
 )
-from experiments.paper_scenes import (  # noqa: E402
+from experiments.paper.scenes import (  # noqa: E402
     PAPER_SCENES,
     Budget,
     SceneRecords,
     film_scene,
     score_frame,
 )
-from experiments.reproduce_paper import QUICK_BUDGET, main, reproduce  # noqa: E402
+from experiments.paper.reproduce import QUICK_BUDGET, main, reproduce  # noqa: E402
 
 FRAME_PX = 320 * 240
 

@@ -4,9 +4,9 @@ from pathlib import Path
 
 import pytest
 
-from citysim.config import load_scenario
-from citysim.control import CONTROLLERS
-from citysim.street import build_street
+from citysim.config.scenario import load_scenario
+from citysim.control.controllers import CONTROLLERS
+from citysim.world.street import build_street
 from detector.camera import CameraModel
 
 ROOT = Path(__file__).resolve().parents[1] / "scenarios"

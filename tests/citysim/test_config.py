@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from citysim.agents import MAX_SPEED_MPS
-from citysim.config import ScenarioError, load_scenario, override, scenario_from_mapping
-from citysim.street import build_street
+from citysim.world.agents import MAX_SPEED_MPS
+from citysim.config.scenario import ScenarioError, load_scenario, override, scenario_from_mapping
+from citysim.world.street import build_street
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 SUBURBAN = SCENARIOS / "suburban_night.yaml"

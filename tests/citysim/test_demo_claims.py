@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from citysim.config import ControllerSpec, load_scenario, override
-from citysim.sim import run_controller
+from citysim.config.scenario import ControllerSpec, load_scenario, override
+from citysim.sim.loop import run_controller
 
 REPO = Path(__file__).resolve().parents[2]
 

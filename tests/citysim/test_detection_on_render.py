@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import simpy
 
-from citysim.config import load_scenario, override
-from citysim.metrics_confusion import iou_matrix
-from citysim.render import CameraRenderer
-from citysim.sim import render_params_of, seed_streams
-from citysim.street import build_street
-from citysim.traffic import start_traffic
-from citysim.world import World
+from citysim.config.scenario import load_scenario, override
+from citysim.metrics.confusion import iou_matrix
+from citysim.render.camera import CameraRenderer
+from citysim.sim.loop import render_params_of, seed_streams
+from citysim.world.street import build_street
+from citysim.world.traffic import start_traffic
+from citysim.world.physics import World
 from detector.classifier import default_model
 from detector.detector import Detector
 

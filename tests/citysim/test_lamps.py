@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from citysim.lamps import Lamp, LuminaireSpec, always_on_energy_j
+from citysim.control.lamps import Lamp, LuminaireSpec, always_on_energy_j
 
 
 def test_always_on_energy_is_lamps_times_rated_power_times_duration_exactly():

@@ -9,16 +9,16 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from citysim.agents import AgentState
-from citysim.lamps import Lamp, LuminaireSpec
-from citysim.metrics import (
+from citysim.world.agents import AgentState
+from citysim.control.lamps import Lamp, LuminaireSpec
+from citysim.metrics.energy import (
     CONFUSION_CLASSES,
     DetectionConfusion,
     QuantileSketch,
     ZoneTracker,
     energy_summary,
 )
-from citysim.street import LampSite, Lane, Sidewalk, Street
+from citysim.world.street import LampSite, Lane, Sidewalk, Street
 from detector.camera import CameraModel
 
 DT_S = 1 / 30  # physics step
@@ -217,7 +217,7 @@ def test_quantile_sketch_is_within_half_a_percent_of_exact_quantiles():
 
 # ---------------------------------------------------------------------- confusion
 @dataclass(frozen=True)
-class Truth:  # stand-in for citysim.render.TruthObject
+class Truth:  # stand-in for citysim.render.camera.TruthObject
     object_id: int
     cls: str
     x: int

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import simpy
 
-from citysim.network import LinkSpec, Message, Network
+from citysim.control.network import LinkSpec, Message, Network
 
 
 def _run(spec: LinkSpec, seed: int, n_sends: int = 2000, n_lamps: int = 5):

@@ -16,13 +16,13 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.config import scenario_from_mapping
-from citysim.plots import PlotError, plot_run, plot_sweep
-from citysim.plots_common import CONTROLLER_COLORS, axis_label, clock_label
-from citysim.report import best_settings, write_report
-from citysim.sim import run_comparison
-from citysim.sweep_results import ResultsFile, flatten_summary
-from citysim.sweep_spec import point_id
+from citysim.config.scenario import scenario_from_mapping
+from citysim.report.run_plots import PlotError, plot_run, plot_sweep
+from citysim.report.common import CONTROLLER_COLORS, axis_label, clock_label
+from citysim.report.html import best_settings, write_report
+from citysim.sim.loop import run_comparison
+from citysim.sweep.results import ResultsFile, flatten_summary
+from citysim.sweep.spec import point_id
 from tests.citysim.streets import two_way_street
 
 REPO = Path(__file__).resolve().parents[2]
@@ -198,7 +198,7 @@ def test_heatmaps_over_height_and_tilt(tmp_path):
 
 def test_best_settings_respects_unlit_crossings(tmp_path):
     folder = synthetic_sweep(tmp_path / "a", with_detection=True, savings_slope=0.6)
-    from citysim.plots_sweep import SweepTable
+    from citysim.report.sweep_plots import SweepTable
 
     table = SweepTable.load(folder)
     best = {b["goal"]: b for b in best_settings(table.ok, table.axes)}

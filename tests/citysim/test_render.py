@@ -8,12 +8,12 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.agents import AgentState, MemberState
-from citysim.render import CameraRenderer, RenderParams
-from citysim.render_bench import bench_render
-from citysim.render_blur import _smear
-from citysim.render_models import agent_shape
-from citysim.street import LampSite, Lane, Sidewalk, StaticObject, Street
+from citysim.world.agents import AgentState, MemberState
+from citysim.render.camera import CameraRenderer, RenderParams
+from experiments.bench.scene import bench_render
+from citysim.render.blur import _smear
+from citysim.render.models import agent_shape
+from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from detector.camera import CameraModel
 
 PINHOLE = CameraModel(
@@ -411,8 +411,8 @@ def test_bench_reports_ms_per_frame_for_each_object_count() -> None:
 # ------------------------------------------------------------------ batched drawing parts
 @pytest.mark.parametrize("index", range(5))
 def test_part_outlines_from_face_tables_fill_like_the_convex_hull(index: int) -> None:
-    from citysim.render_models import draw_models
-    from citysim.render_outline import outline_mask_bits, outline_tables
+    from citysim.render.models import draw_models
+    from citysim.render.outline import outline_mask_bits, outline_tables
 
     model = draw_models([one_of_each(0.0)[index]])[0]
     k = 8
@@ -442,7 +442,7 @@ def test_part_outlines_from_face_tables_fill_like_the_convex_hull(index: int) ->
 
 
 def test_box_minimum_is_a_lower_bound_and_exact_on_whole_cells() -> None:
-    from citysim.render_canvas import RANGE_MIN_CELL_PX, BoxMinimum
+    from citysim.render.canvas import RANGE_MIN_CELL_PX, BoxMinimum
 
     rng = np.random.default_rng(0)
     img = rng.uniform(0.0, 100.0, (70, 90)).astype(np.float32)
@@ -458,7 +458,7 @@ def test_box_minimum_is_a_lower_bound_and_exact_on_whole_cells() -> None:
 
 
 def test_frame_from_changed_boxes_is_the_whole_frame_converted() -> None:
-    from citysim.render_output import FrameOutput, merge_boxes
+    from citysim.render.output import FrameOutput, merge_boxes
 
     street = make_street(BARREL)
     params = RenderParams(sensor_noise_std_dn=0.0, branch_sway=False)
@@ -479,13 +479,13 @@ def test_frame_from_changed_boxes_is_the_whole_frame_converted() -> None:
 
 
 def light_to_dn(radiance: np.ndarray) -> np.ndarray:
-    from citysim.render_light import radiance_to_dn
+    from citysim.render.light import radiance_to_dn
 
     return radiance_to_dn(radiance)
 
 
 def test_agents_moving_alike_share_one_smear_and_keep_their_own_truth(monkeypatch) -> None:
-    import citysim.render_agents as render_agents
+    import citysim.render.agents as render_agents
 
     calls = []
     original = render_agents.composite
@@ -509,7 +509,7 @@ def test_agents_moving_alike_share_one_smear_and_keep_their_own_truth(monkeypatc
 
 
 def test_ground_spots_touch_only_the_boxes_they_return() -> None:
-    from citysim.render_spots import add_ground_spots
+    from citysim.render.spots import add_ground_spots
 
     r = renderer()
     car = AgentState(4, "vehicle", 9.0, -1.75, 0.0, 12.0, 4.4, 1.8, 1.5, light_on=True)
@@ -524,7 +524,7 @@ def test_ground_spots_touch_only_the_boxes_they_return() -> None:
 
 
 def test_noise_fields_per_frame_index_are_fixed_and_varied() -> None:
-    from citysim.render_effects import SensorNoise
+    from citysim.render.effects import SensorNoise
 
     picks = {SensorNoise.pick_for(7, k) for k in range(200)}
     assert len(picks) > 190  # hardly any repeats

@@ -8,14 +8,14 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.agents import AgentState
-from citysim.render import RenderParams
-from citysim.render_agents import AgentLighting, part_radiance
-from citysim.render_beams import BEAMS
-from citysim.render_canvas import Z_NEAR_M
-from citysim.render_kernels import SUBPIXEL_BITS, fill_ranks, label_stats
-from citysim.render_models import agent_shape
-from citysim.render_spots import add_ground_spots, spot_class
+from citysim.world.agents import AgentState
+from citysim.render.camera import RenderParams
+from citysim.render.agents import AgentLighting, part_radiance
+from citysim.render.beams import BEAMS
+from citysim.render.canvas import Z_NEAR_M
+from citysim.render.kernels import SUBPIXEL_BITS, fill_ranks, label_stats
+from citysim.render.models import agent_shape
+from citysim.render.spots import add_ground_spots, spot_class
 from tests.citysim.test_render import (
     BARREL,
     EXACT,
@@ -200,7 +200,7 @@ def test_agent_straddling_the_near_plane_is_clipped_and_reported() -> None:
 
 
 def test_boxes_group_by_nearness_and_alike_motion() -> None:
-    from citysim.render_kernels import group_boxes
+    from citysim.render.kernels import group_boxes
 
     boxes = np.array([(10, 10, 30, 50), (25, 12, 45, 52), (28, 10, 48, 50), (200, 10, 220, 50)])
     motion = np.array([(4.0, 0.0), (4.3, 0.2), (-6.0, 0.0), (4.0, 0.0)])
@@ -212,7 +212,7 @@ def test_boxes_group_by_nearness_and_alike_motion() -> None:
 
 
 def test_merged_boxes_cover_their_inputs_and_leave_nothing_worth_joining() -> None:
-    from citysim.render_output import BOX_COST_PX, merge_boxes
+    from citysim.render.output import BOX_COST_PX, merge_boxes
 
     rng = np.random.default_rng(4)
     xy = rng.integers(0, 300, (25, 2))
@@ -228,7 +228,7 @@ def test_merged_boxes_cover_their_inputs_and_leave_nothing_worth_joining() -> No
 
 
 def test_lamp_light_on_the_road_falls_as_the_cosine_of_the_angle_from_the_nadir() -> None:
-    from citysim.render_light import LAMP_POWER, LAMP_SPREAD_DEG, lamp_irradiance
+    from citysim.render.light import LAMP_POWER, LAMP_SPREAD_DEG, lamp_irradiance
 
     h_m = 6.0
     x_m = np.array([0.0, 2.0, 5.0, 10.0, 20.0])

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import simpy
 
-from citysim.config import ControllerSpec, scenario_from_mapping
-from citysim.sim import run_controller, seed_streams
-from citysim.street import build_street
-from citysim.traffic import start_traffic
-from citysim.world import World
+from citysim.config.scenario import ControllerSpec, scenario_from_mapping
+from citysim.sim.loop import run_controller, seed_streams
+from citysim.world.street import build_street
+from citysim.world.traffic import start_traffic
+from citysim.world.physics import World
 from tests.citysim.streets import two_way_street
 
 FPS = 15.0

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 import yaml
 
-from citysim.report import write_report
-from citysim.sweep import SweepError, load_sweep, run_sweep
-from citysim.sweep_spec import point_id
+from citysim.report.html import write_report
+from citysim.sweep.runner import SweepError, load_sweep, run_sweep
+from citysim.sweep.spec import point_id
 from tests.citysim.streets import two_way_street
 
 REPO = Path(__file__).resolve().parents[2]
@@ -301,7 +301,7 @@ def test_point_ids_depend_on_values_and_seed_only():
 
 
 def test_results_file_drops_rows_cut_short_by_a_crash(tmp_path):
-    from citysim.sweep_results import ResultsFile
+    from citysim.sweep.results import ResultsFile
 
     path = tmp_path / "results.csv"
     table = ResultsFile(path, ["traffic_density"])
@@ -320,12 +320,12 @@ def test_results_file_drops_rows_cut_short_by_a_crash(tmp_path):
 
 
 def test_bad_worker_count_and_unreachable_scheduler_are_user_errors(tmp_path, monkeypatch):
-    import citysim.sweep
+    import citysim.sweep.runner
 
     sweep_file = write_sweep(tmp_path / "in", SWEEP_2X2)
     with pytest.raises(SweepError, match="workers: a whole number >= 1, got 0"):
         run_sweep(sweep_file, tmp_path / "a", workers=0, progress=False)
-    monkeypatch.setattr(citysim.sweep, "SCHEDULER_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(citysim.sweep.runner, "SCHEDULER_TIMEOUT_S", 1.0)
     nobody = f"tcp://127.0.0.1:{_free_port()}"
     with pytest.raises(SweepError, match=f"scheduler '{nobody}': cannot connect"):
         run_sweep(sweep_file, tmp_path / "b", scheduler=nobody, progress=False)

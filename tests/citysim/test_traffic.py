@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import simpy
 
-from citysim.agents import AGENT_KINDS, MAX_SPEED_MPS, DrawOptions, draw_agent
-from citysim.config import load_scenario, override
-from citysim.config_traffic import PedestrianTraffic, VehicleTraffic
-from citysim.street import build_street
-from citysim.traffic import arrivals, draw_arrival, start_traffic
+from citysim.world.agents import AGENT_KINDS, MAX_SPEED_MPS, DrawOptions, draw_agent
+from citysim.config.scenario import load_scenario, override
+from citysim.config.traffic import PedestrianTraffic, VehicleTraffic
+from citysim.world.street import build_street
+from citysim.world.traffic import arrivals, draw_arrival, start_traffic
 
 SUBURBAN = Path(__file__).resolve().parents[2] / "scenarios" / "suburban_night.yaml"
 

@@ -1,0 +1,222 @@
+"""Scenario schema for traffic: per-class arrival rates, hourly profiles, speeds, behaviour shares.
+
+Arrivals of each class are a Poisson process whose rate is ``rate_per_hour``
+times the hourly profile: ``hourly_profile[k]`` multiplies the rate during hour
+k of the run (hour 0 starts at the scenario's ``start_hour``); past the end of
+the list the last multiplier holds. Speeds are desired (free-flow) speeds,
+given in km/h or m/s; nothing moves faster than 60 km/h.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar, Literal
+
+from pydantic import Field, model_validator
+
+from citysim.world.agents import (
+    AGENT_KINDS,
+    KMH_PER_MPS,
+    MAX_SPEED_KMH,
+    MAX_SPEED_MPS,
+    RUNNING_SPEED,
+    DrawOptions,
+    SpeedDistribution,
+)
+from citysim.config.base import FieldPathError, Spec
+
+
+class _SpeedRange(Spec):
+    """Uniform on [min, max], or normal(mean, std) clipped to [min, max]."""
+
+    UNIT_TO_MPS: ClassVar[float] = 1.0
+    min: float
+    max: float
+    mean: float | None = None
+    std: float | None = Field(default=None, ge=0)
+
+    @model_validator(mode="after")
+    def _order(self) -> _SpeedRange:
+        if self.min > self.max:
+            raise FieldPathError(("max",), f"must be >= min ({self.min:g}), got {self.max:g}")
+        if (self.mean is None) != (self.std is None):
+            raise FieldPathError(
+                ("std" if self.std is None else "mean",), "give both mean and std, or neither"
+            )
+        if self.mean is not None and not self.min <= self.mean <= self.max:
+            raise FieldPathError(
+                ("mean",),
+                f"must lie within min..max ({self.min:g}..{self.max:g}), got {self.mean:g}",
+            )
+        return self
+
+    def distribution(self) -> SpeedDistribution:
+        k = self.UNIT_TO_MPS
+        return SpeedDistribution(
+            self.min * k,
+            min(self.max * k, MAX_SPEED_MPS),
+            None if self.mean is None else self.mean * k,
+            None if self.std is None else self.std * k,
+        )
+
+
+class SpeedKmh(_SpeedRange):
+    UNIT_TO_MPS: ClassVar[float] = 1.0 / KMH_PER_MPS
+    min: float = Field(gt=0, le=MAX_SPEED_KMH)
+    max: float = Field(gt=0, le=MAX_SPEED_KMH)
+
+
+class SpeedMps(_SpeedRange):
+    min: float = Field(gt=0, le=round(MAX_SPEED_MPS, 4))
+    max: float = Field(gt=0, le=round(MAX_SPEED_MPS, 4))
+
+
+class TrafficClassSpec(Spec):
+    """Arrivals and speeds of one agent class; ``kind`` names the class."""
+
+    kind: ClassVar[str] = ""
+    rate_per_hour: float = Field(default=0.0, ge=0, le=20000, description="mean arrivals per hour")
+    hourly_profile: tuple[float, ...] = Field(
+        default=(), description="rate multiplier per hour of the run"
+    )
+    speed_kmh: SpeedKmh | None = None
+    speed_mps: SpeedMps | None = None
+
+    @model_validator(mode="after")
+    def _one_speed(self) -> TrafficClassSpec:
+        if self.speed_kmh is not None and self.speed_mps is not None:
+            raise FieldPathError(("speed_mps",), "give either speed_kmh or speed_mps, not both")
+        for i, m in enumerate(self.hourly_profile):
+            if not 0 <= m <= 100:
+                raise FieldPathError(
+                    ("hourly_profile", i), f"multipliers must lie within 0..100, got {m:g}"
+                )
+        return self
+
+    def rate_per_s(self, t_s: float) -> float:
+        """Arrival rate at ``t_s`` seconds into the run, 1/s."""
+        m = 1.0
+        if self.hourly_profile:
+            m = self.hourly_profile[min(int(t_s // 3600.0), len(self.hourly_profile) - 1)]
+        return self.rate_per_hour * m / 3600.0
+
+    @property
+    def max_rate_per_s(self) -> float:
+        return self.rate_per_hour * max(self.hourly_profile, default=1.0) / 3600.0
+
+    def speed(self) -> SpeedDistribution:
+        chosen = self.speed_kmh or self.speed_mps
+        return chosen.distribution() if chosen is not None else AGENT_KINDS[self.kind].speed
+
+    def draw_options(self, *, night: bool, max_group_width_m: float = 3.0) -> DrawOptions:
+        return DrawOptions(speed=self.speed(), night=night, max_group_width_m=max_group_width_m)
+
+
+class _WalkerTraffic(TrafficClassSpec):
+    crossing_fraction: float = Field(
+        default=0.3, ge=0, le=1, description="share that crosses the street"
+    )
+    marked_crossing_fraction: float = Field(
+        default=0.6,
+        ge=0,
+        le=1,
+        description="share of crossers using street.crossings_x_m; the rest cross anywhere",
+    )
+    flashlight_fraction: float = Field(default=0.05, ge=0, le=1)
+
+    def draw_options(self, *, night: bool, max_group_width_m: float = 3.0) -> DrawOptions:
+        return DrawOptions(
+            speed=self.speed(), light_fraction=self.flashlight_fraction, night=night,
+            max_group_width_m=max_group_width_m,
+        )  # fmt: skip
+
+
+class PedestrianTraffic(_WalkerTraffic):
+    kind: ClassVar[str] = "pedestrian"
+    running_fraction: float = Field(default=0.05, ge=0, le=1)
+    running_speed_mps: SpeedMps | None = None
+
+    def draw_options(self, *, night: bool, max_group_width_m: float = 3.0) -> DrawOptions:
+        run = self.running_speed_mps.distribution() if self.running_speed_mps else RUNNING_SPEED
+        return DrawOptions(
+            speed=self.speed(), running_fraction=self.running_fraction, running_speed=run,
+            light_fraction=self.flashlight_fraction, night=night,
+        )  # fmt: skip
+
+
+class GroupSize(Spec):
+    min: int = Field(default=2, ge=2, le=4)
+    max: int = Field(default=4, ge=2, le=4)
+
+    @model_validator(mode="after")
+    def _order(self) -> GroupSize:
+        if self.min > self.max:
+            raise FieldPathError(("max",), f"must be >= min ({self.min}), got {self.max}")
+        return self
+
+
+class GroupTraffic(_WalkerTraffic):
+    kind: ClassVar[str] = "group"
+    crossing_fraction: float = Field(default=0.2, ge=0, le=1)
+    flashlight_fraction: float = Field(default=0.1, ge=0, le=1)
+    size: GroupSize = GroupSize()
+
+    def draw_options(self, *, night: bool, max_group_width_m: float = 3.0) -> DrawOptions:
+        return DrawOptions(
+            speed=self.speed(), light_fraction=self.flashlight_fraction, night=night,
+            group_size=(self.size.min, self.size.max), max_group_width_m=max_group_width_m,
+        )  # fmt: skip
+
+
+class _LitTraffic(TrafficClassSpec):
+    lights_fraction: float = Field(
+        default=1.0, ge=0, le=1, description="share riding/driving with lights on at night"
+    )
+
+    def draw_options(self, *, night: bool, max_group_width_m: float = 3.0) -> DrawOptions:
+        return DrawOptions(speed=self.speed(), light_fraction=self.lights_fraction, night=night)
+
+
+class CyclistTraffic(_LitTraffic):
+    kind: ClassVar[str] = "cyclist"
+    lights_fraction: float = Field(default=0.8, ge=0, le=1)
+
+
+class VehicleTraffic(_LitTraffic):
+    kind: ClassVar[str] = "vehicle"
+
+
+class AnimalTraffic(TrafficClassSpec):
+    kind: ClassVar[str] = "animal"
+
+
+class TrafficClasses(Spec):
+    """One entry per agent class; an omitted class does not appear."""
+
+    pedestrian: PedestrianTraffic = PedestrianTraffic()
+    group: GroupTraffic = GroupTraffic()
+    cyclist: CyclistTraffic = CyclistTraffic()
+    vehicle: VehicleTraffic = VehicleTraffic()
+    animal: AnimalTraffic = AnimalTraffic()
+
+    def all(self) -> tuple[TrafficClassSpec, ...]:
+        return (self.pedestrian, self.group, self.cyclist, self.vehicle, self.animal)
+
+
+class ScriptedAgent(Spec):
+    """One agent that enters at a set time: a test object for a planner (a 60 km/h car at 22:05)."""
+
+    cls: Literal["pedestrian", "group", "cyclist", "vehicle"]
+    t_s: float = Field(ge=0, description="simulated time it enters the street, s")
+    speed_kmh: float = Field(gt=0, le=MAX_SPEED_KMH, description="its desired speed")
+    direction: Literal[1, -1] = Field(default=1, description="+1: toward +x, -1: toward -x")
+    path: int = Field(
+        default=0, ge=0, description="index of its lane (cyclist, vehicle) or sidewalk (walkers)"
+    )
+    light_on: bool | None = Field(default=None, description="headlight/flashlight; default: at night for lit classes")
+
+
+class TrafficSpec(Spec):
+    classes: TrafficClasses = TrafficClasses()
+    scripted: tuple[ScriptedAgent, ...] = Field(
+        default=(), description="agents that enter at set times, on top of the random arrivals"
+    )

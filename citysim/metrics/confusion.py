@@ -1,0 +1,211 @@
+"""Per-frame detection quality against render ground truth, streamed.
+
+Truth objects (``citysim.render.camera.TruthObject``) and detections
+(``detector.detector.Detection``) are read by attribute only, so this module
+imports neither. Boxes are OpenCV rects ``(x, y, w, h)`` in pixels.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from citysim.world.agents import TARGET_CLASSES
+from citysim.control.lamps import check_number
+
+#: Detector class order (detector.classifier.CLASSES): rows/columns of ``confusion_5``.
+CONFUSION_CLASSES = ("noise", *TARGET_CLASSES)
+
+
+class TruthLike(Protocol):
+    """What is read of a ``citysim.render.camera.TruthObject``."""
+
+    object_id: int
+    cls: str
+    x: int
+    y: int
+    w: int
+    h: int
+    fully_visible: bool
+
+
+class DetectionLike(Protocol):
+    """What is read of a ``detector.detector.Detection``."""
+
+    box_px: tuple[int, int, int, int]
+    cls: str
+    p_target: float
+
+
+def iou_matrix(boxes_a: np.ndarray, boxes_b: np.ndarray) -> np.ndarray:
+    """IoU of every (x, y, w, h) box in ``boxes_a`` with every box in ``boxes_b`` (OpenCV rects, px)."""
+    a = np.asarray(boxes_a, dtype=float).reshape(-1, 4)[:, None, :]
+    b = np.asarray(boxes_b, dtype=float).reshape(-1, 4)[None, :, :]
+    iw = np.clip(
+        np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2]) - np.maximum(a[..., 0], b[..., 0]),
+        0,
+        None,
+    )
+    ih = np.clip(
+        np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3]) - np.maximum(a[..., 1], b[..., 1]),
+        0,
+        None,
+    )
+    inter = iw * ih
+    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
+    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
+
+
+def greedy_match(iou: np.ndarray, threshold: float) -> list[tuple[int, int]]:
+    """Pairs (row, col) taken in order of decreasing IoU, each row and column once, IoU >= threshold."""
+    pairs: list[tuple[int, int]] = []
+    used_r, used_c = set(), set()
+    flat = np.argsort(-iou, axis=None, kind="stable")
+    for r, c in zip(*np.unravel_index(flat, iou.shape), strict=True):
+        if iou[r, c] < threshold:
+            break
+        if r not in used_r and c not in used_c:
+            pairs.append((int(r), int(c)))
+            used_r.add(r)
+            used_c.add(c)
+    return pairs
+
+
+@dataclass
+class _Pass:
+    cls: str
+    last_seen_s: float
+    fully_seen: bool = False
+    detected: bool = False
+
+
+class DetectionConfusion:
+    """Per-frame detection quality against render ground truth, streamed.
+
+    Truth 'animal' (any class outside the targets) counts as 'noise'; a
+    detection that matches no truth box is a noise region. A detection is a
+    target if ``p_target >= target_threshold`` (the ``Detector`` rule); the
+    5-class confusion uses its ``cls``. A *pass* is one object in view of one
+    lamp's camera; it ends when that camera has not seen it for ``pass_gap_s``.
+    A pass is missed when the object was fully visible in at least one frame
+    and never matched by a target detection.
+    """
+
+    def __init__(
+        self, iou_threshold: float = 0.3, target_threshold: float = 0.5, pass_gap_s: float = 2.0
+    ) -> None:
+        check_number("DetectionConfusion", "iou_threshold", iou_threshold, 0.0, 1.0)
+        check_number("DetectionConfusion", "target_threshold", target_threshold, 0.0, 1.0)
+        check_number("DetectionConfusion", "pass_gap_s", pass_gap_s, 0.0)
+        self.iou_threshold = iou_threshold
+        self.target_threshold = target_threshold
+        self.pass_gap_s = pass_gap_s
+        self.confusion_5 = np.zeros(
+            (len(CONFUSION_CLASSES), len(CONFUSION_CLASSES)), dtype=np.int64
+        )
+        self.tp = self.fp = self.fn = self.tn = 0
+        self.frames = self.regions = self.noise_regions = 0
+        self._passes: dict[int, dict[int, _Pass]] = {}
+        self._pass_counts = {c: [0, 0] for c in TARGET_CLASSES}  # class -> [eligible, missed]
+
+    @staticmethod
+    def _index(cls: str, field_name: str) -> int:
+        if cls in CONFUSION_CLASSES:
+            return CONFUSION_CLASSES.index(cls)
+        raise ValueError(
+            f"DetectionConfusion.add {field_name}: class must be one of {CONFUSION_CLASSES}, got {cls!r}"
+        )
+
+    def add(
+        self,
+        truth: Sequence[TruthLike],
+        detections: Sequence[DetectionLike],
+        lamp_index: int,
+        t_s: float,
+    ) -> None:
+        """Count one frame of lamp ``lamp_index``'s camera at ``t_s`` (s)."""
+        truth_cls = [t.cls if t.cls in TARGET_CLASSES else "noise" for t in truth]
+        det_cls = [self._index(d.cls, "detections.cls") for d in detections]
+        det_target = [d.p_target >= self.target_threshold for d in detections]
+        iou = iou_matrix([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections])
+        pairs = greedy_match(iou, self.iou_threshold)
+        self.frames += 1
+        self.regions += len(detections)
+        matched_truth = dict(pairs)
+        matched_dets = {c for _, c in pairs}
+        for r, c in pairs:
+            self._count(truth_cls[r], det_cls[c], det_target[c])
+        for c in range(len(detections)):
+            if c not in matched_dets:
+                self._count("noise", det_cls[c], det_target[c])
+        passes = self._passes.setdefault(lamp_index, {})
+        for r, t in enumerate(truth):
+            if truth_cls[r] == "noise":
+                continue
+            c = matched_truth.get(r)
+            if c is None and t.fully_visible:
+                self._count(truth_cls[r], 0, False)
+            p = passes.get(t.object_id)
+            if p is not None and t_s - p.last_seen_s > self.pass_gap_s:
+                self._end_pass(p)  # back in view after a gap: that was one pass, this is another
+                p = None
+            if p is None:
+                p = passes[t.object_id] = _Pass(truth_cls[r], t_s)
+            p.last_seen_s = t_s
+            p.fully_seen |= bool(t.fully_visible)
+            p.detected |= c is not None and det_target[c]
+        for object_id in [i for i, p in passes.items() if t_s - p.last_seen_s > self.pass_gap_s]:
+            self._end_pass(passes.pop(object_id))
+
+    def _count(self, truth_cls: str, pred_index: int, pred_target: bool) -> None:
+        self.confusion_5[CONFUSION_CLASSES.index(truth_cls), pred_index] += 1
+        if truth_cls == "noise":
+            self.noise_regions += 1
+            self.fp += int(pred_target)
+            self.tn += int(not pred_target)
+        else:
+            self.tp += int(pred_target)
+            self.fn += int(not pred_target)
+
+    def _end_pass(self, p: _Pass) -> None:
+        if p.fully_seen:
+            self._pass_counts[p.cls][0] += 1
+            self._pass_counts[p.cls][1] += int(not p.detected)
+
+    def finish(self) -> None:
+        """End every open pass (call once after the last frame)."""
+        for passes in self._passes.values():
+            for p in passes.values():
+                self._end_pass(p)
+            passes.clear()
+
+    def summary(self) -> dict[str, Any]:
+        """Counts and tn-free rates; ``miss_rate`` per pass (overall and ``miss_rate_by_class``)."""
+
+        def ratio(num: int, den: int) -> float | None:
+            return num / den if den else None
+
+        eligible = sum(v[0] for v in self._pass_counts.values())
+        missed = sum(v[1] for v in self._pass_counts.values())
+        return {
+            "frames": self.frames,
+            "regions": self.regions,
+            "tp": self.tp,
+            "fp": self.fp,
+            "fn": self.fn,
+            "tn": self.tn,
+            "tpr": ratio(self.tp, self.tp + self.fn),
+            "precision": ratio(self.tp, self.tp + self.fp),
+            "fpr": ratio(self.fp, self.noise_regions),
+            "fp_per_frame": ratio(self.fp, self.frames),
+            "fp_per_region": ratio(self.fp, self.regions),
+            "confusion_5": self.confusion_5.tolist(),
+            "confusion_classes": list(CONFUSION_CLASSES),
+            "object_passes": eligible,
+            "missed_passes": missed,
+            "miss_rate": ratio(missed, eligible),
+            "miss_rate_by_class": {c: ratio(v[1], v[0]) for c, v in self._pass_counts.items()},
+        }

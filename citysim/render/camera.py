@@ -1,0 +1,345 @@
+"""IR-like camera frames of the street, with per-frame ground truth (contract E).
+
+``CameraRenderer(camera, street, params, rng).render(t_s, agents, lamp_levels)``
+returns an 8-bit grayscale frame as the lamp's camera would see it and, for
+every agent whose silhouette shows in the frame, its class and bounding box.
+
+A frame is built on the camera's undistorted canvas (``render_canvas``), in
+linear radiance (``render_light``):
+
+1. the cached static background re-lit by the lamps that are on, swaying
+   crowns composited (``render_background``);
+2. headlight and flashlight spots on the ground (``render_spots``);
+3. agents far to near, motion-blurred, hidden behind nearer standing things
+   (``render_agents``, ``render_clusters``);
+4. glare blobs of carried lights and lamp heads, rain, insects (``render_beams``,
+   ``render_effects``);
+5. camera response to 8 bits, lens distortion by one remap, sensor noise.
+
+Rendering a frame must cost less than detecting it. Step 5 is cached for the
+still view and redone only in the canvas boxes steps 1-4 drew on
+(``render_output``); the agents of a frame are posed, projected and shaded
+together, and drawn in clusters that share one smear; the per-pixel loops
+of agents, spots and truth are compiled (``render_kernels``), one call per
+frame or cluster rather than several OpenCV calls per agent.
+
+Ground truth: boxes are OpenCV ``boundingRect`` boxes (x, y, w, h) of the
+agent's *visible* rendered pixels in the output frame (with blur, the pixels
+the smeared agent covers more than half; with distortion, the frame pixels
+whose nearest canvas pixel shows it), clipped to the frame.
+``distance_m`` is the forward ground distance of the footprint centre along
+the camera heading, the quantity ``detector.features`` estimates (eq. 4).
+Agents entirely hidden or out of view are not reported.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from citysim.world.agents import AgentState
+from citysim.render.agents import AgentLighting, AgentPainter, DrawnAgent
+from citysim.render.background import ShadingInputs, StaticScene
+from citysim.render.beams import (
+    BEAMS,
+    LAMP_HEAD_GLARE,
+    LAMP_HEAD_SIZE_M,
+    agent_glare_sources,
+    glare,
+)
+from citysim.render.canvas import build_canvas
+from citysim.render.effects import Insects, SensorNoise, draw_rain
+from citysim.render.kernels import label_stats
+from citysim.render.models import AGENT_MODELS, prepare_models
+from citysim.render.output import FrameOutput
+from citysim.render.spots import add_ground_spots, spot_reach
+from citysim.world.street import Street
+from detector.camera import CameraModel
+
+#: An agent hidden behind nearer things for more than this fraction is not fully visible.
+MAX_HIDDEN_FRACTION = 0.5
+
+_RANGES: dict[str, tuple[float, float]] = {
+    "ir_emitter_power": (0.0, 1e6),
+    "ambient_light": (0.0, 1.0),
+    "sensor_noise_std_dn": (0.0, 100.0),
+    "exposure_ms": (0.0, 1000.0),
+    "rain_drops_per_frame": (0, 100_000),
+    "insects_per_min": (0.0, 1e4),
+    "wind_mps": (0.0, 60.0),
+}
+
+
+@dataclass(frozen=True)
+class RenderParams:
+    """How the camera and the night look.
+
+    ``ir_emitter_power``: radiance x m^2 the IR emitter gives a white surface
+    facing it (1.0 = full scale at 1 m; 100 makes a 0.25-reflectance road 10 m
+    ahead of a 4 m pole read ~70 DN and a walker there ~190 DN). ``ambient_light``: 0 night .. 1 day.
+    ``wind_mps`` drives the crowns' sway (an addition to the contract, with a default).
+    """
+
+    ir_emitter_power: float = 80.0
+    ambient_light: float = 0.0
+    sensor_noise_std_dn: float = 3.0
+    exposure_ms: float = 30.0
+    motion_blur: bool = True
+    distortion: bool = True
+    lamp_light: bool = True
+    rain_drops_per_frame: int = 0
+    insects_per_min: float = 0.0
+    branch_sway: bool = True
+    wind_mps: float = 3.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in _RANGES:
+                lo, hi = _RANGES[f.name]
+                if (
+                    not isinstance(value, int | float)
+                    or isinstance(value, bool)
+                    or not lo <= value <= hi
+                ):
+                    raise ValueError(
+                        f"RenderParams.{f.name}: must be a number in [{lo}, {hi}], got {value!r}"
+                    )
+            elif not isinstance(value, bool):
+                raise ValueError(f"RenderParams.{f.name}: must be true or false, got {value!r}")
+
+
+@dataclass(frozen=True)
+class TruthObject:
+    """One agent visible in a frame. Box in px, OpenCV boundingRect convention."""
+
+    object_id: int
+    cls: str
+    x: int
+    y: int
+    w: int
+    h: int
+    touches_border: bool
+    fully_visible: bool
+    distance_m: float
+
+
+@dataclass(frozen=True)
+class RenderedFrame:
+    image: np.ndarray  # uint8 (H, W)
+    truth: tuple[TruthObject, ...]
+
+
+class CameraRenderer:
+    """Renders one camera's frames; the static scene is prepared once here."""
+
+    def __init__(
+        self, camera: CameraModel, street: Street, params: RenderParams, rng: np.random.Generator
+    ) -> None:
+        self.camera = camera
+        self.street = street
+        self.params = params
+        self.rng = rng
+        self.canvas = build_canvas(camera, params.distortion)
+        self.lamp_positions_m = np.array(
+            [[lamp.x_m, lamp.y_m, lamp.pole_height_m] for lamp in street.lamps], dtype=np.float64
+        ).reshape(-1, 3)
+        shading = ShadingInputs(
+            params.ambient_light, params.ir_emitter_power, self.lamp_positions_m
+        )
+        self.scene = StaticScene(
+            self.canvas, street, shading, rng, params.branch_sway, params.wind_mps
+        )
+        self._heads_in_view = self.canvas.spheres_in_view(
+            self.lamp_positions_m, np.full(len(self.lamp_positions_m), 1.0)
+        )
+        prepare_models()
+        self.painter = AgentPainter(self.canvas, params.exposure_ms, params.motion_blur)
+        self.output = FrameOutput(self.canvas)
+        self._shown_at = self.canvas.frame_to_canvas_index()
+        no_uv = np.zeros((0, 0), np.float32)
+        self._frame_uv = self.canvas.frame_uv or (no_uv, no_uv)
+        self.noise = (
+            SensorNoise(rng, camera.height_px, camera.width_px, params.sensor_noise_std_dn)
+            if params.sensor_noise_std_dn > 0.0
+            else None
+        )
+        self.insects = Insects(params.insects_per_min, int(rng.integers(2**63)))
+        self._frame_seed = int(rng.integers(2**63))
+        pole, heading = camera.position_m, camera.heading_unit
+        self._forward_axis = (float(pole[0]), float(pole[1]), float(heading[0]), float(heading[1]))
+
+    def _levels(self, lamp_levels: Sequence[float]) -> np.ndarray:
+        levels = np.asarray(lamp_levels, dtype=np.float64).reshape(-1)
+        if len(levels) != len(self.street.lamps):
+            raise ValueError(
+                f"lamp_levels: need one level per street lamp ({len(self.street.lamps)}), got {len(levels)}"
+            )
+        if not self.params.lamp_light:
+            return np.zeros_like(levels)
+        levels = np.where(levels == levels, levels, 0.0)  # NaN: off
+        return np.minimum(np.maximum(levels, 0.0), 1.0)
+
+    def _in_view(self, agents: list[AgentState]) -> tuple[list[AgentState], list[AgentState]]:
+        """The agents that may show in this camera (a street holds many more), and the lit
+        agents whose light spot may show. Every agent's class is checked, seen or not."""
+        if not agents:
+            return [], []
+        for a in agents:
+            if a.cls not in AGENT_MODELS:
+                raise ValueError(
+                    f"AgentState {a.object_id}: cls {a.cls!r} cannot be rendered; valid: {sorted(AGENT_MODELS)}"
+                )
+        pos = np.array(
+            [[a.x_m, a.y_m, 0.5 * a.height_m, a.length_m, a.width_m, a.height_m] for a in agents]
+        )
+        radius = 0.5 * np.linalg.norm(pos[:, 3:], axis=1) + 1.0  # + members' spread, walkers' limbs
+        seen = self.canvas.spheres_in_view(pos[:, :3], radius)
+        lit = [a for a in agents if a.light_on and a.cls in BEAMS]
+        spots = []
+        if lit:
+            shown = self.canvas.spheres_in_view(*spot_reach(lit))
+            spots = [a for a, ok in zip(lit, shown, strict=True) if ok]
+        return [a for a, ok in zip(agents, seen, strict=True) if ok], spots
+
+    def render(
+        self,
+        t_s: float,
+        agents: Sequence[AgentState],
+        lamp_levels: Sequence[float],
+        frame_index: int | None = None,
+    ) -> RenderedFrame:
+        """The frame at time ``t_s`` (s) with ``agents`` and each street lamp at ``lamp_levels`` (0..1).
+
+        Sensor noise and rain come from the renderer's generator, in call order;
+        with ``frame_index`` (>= 0) they are a function of that index and the
+        renderer's seed instead, so a frame is the same whichever frames were
+        rendered before it (cameras that skip idle frames stay comparable).
+        """
+        p = self.params
+        if frame_index is not None and frame_index < 0:
+            raise ValueError(f"frame_index: must be >= 0, got {frame_index}")
+        levels = self._levels(lamp_levels)
+        agents, lit = self._in_view(list(agents))
+        if self._still_view(levels, t_s):  # rebuilt, crowns at time t included
+            depth = self.scene.depth
+        else:
+            depth, redrawn = self.scene.sway(t_s, levels, self.output.still, relit=False)
+            self.output.still_changed(redrawn)
+        img = self.output.work
+        boxes: list[tuple[int, int, int, int]] = []
+
+        spot_gain = 1.0 - p.ambient_light
+        if spot_gain > 0.0 and lit:
+            boxes += add_ground_spots(self.scene, img, lit, spot_gain)
+
+        on = levels > 0.0
+        lighting = AgentLighting.of(
+            p.ir_emitter_power, p.ambient_light, self.lamp_positions_m[on], levels[on]
+        )
+        labels = np.zeros(self.canvas.shape, np.uint8 if len(agents) < 255 else np.uint16)
+        drawn, drawn_boxes = self.painter.paint(
+            agents, lighting, img, depth, self.scene.nearest_occluder, labels
+        )
+        boxes += drawn_boxes
+
+        wet = p.rain_drops_per_frame > 0
+        pts, power, size = agent_glare_sources(self.canvas, agents, p.ambient_light)
+        boxes += glare(self.canvas, img, depth, pts, power, size, wet)
+        exposure_s = p.exposure_ms / 1000.0
+        if wet:
+            rng = (
+                self.rng
+                if frame_index is None
+                else np.random.default_rng([self._frame_seed, frame_index])
+            )
+            draw_rain(
+                self.canvas,
+                img,
+                p.rain_drops_per_frame,
+                exposure_s,
+                p.ir_emitter_power,
+                p.ambient_light,
+                rng,
+            )
+            boxes.append((0, 0, self.canvas.width_px, self.canvas.height_px))
+        boxes += self.insects.draw(
+            self.canvas, img, max(t_s, 0.0), exposure_s, p.ir_emitter_power, p.ambient_light
+        )
+
+        frame = self.output.finish(boxes)
+        if self.noise is not None:
+            if frame_index is None:
+                pick = self.noise.pick(self.rng)
+            else:
+                pick = self.noise.pick_for(self._frame_seed, frame_index)
+            frame = self.noise.apply(frame, pick)
+        truth = self._truth(agents, drawn, labels) if drawn else ()
+        return RenderedFrame(frame, truth)
+
+    def _still_view(self, levels: np.ndarray, t_s: float) -> bool:
+        """Bring the cached frame of the still view (lit background, crowns, lamp heads'
+        glare) up to the lamps' levels; whether it was rebuilt (crowns drawn at time t)."""
+        key, lit = self.scene.lit(levels)
+        heads = (levels > 0.0) & self._heads_in_view
+        key = (key, tuple(levels[heads].tolist()))
+        if key == self.output.key:
+            return False
+        layer = np.zeros(self.canvas.shape, np.float32)
+        glare_boxes = glare(
+            self.canvas,
+            layer,
+            self.scene.occluder_depth,
+            self.lamp_positions_m[heads],
+            LAMP_HEAD_GLARE * levels[heads],
+            np.full(int(heads.sum()), LAMP_HEAD_SIZE_M),
+            self.params.rain_drops_per_frame > 0,
+        )
+        self.output.set_background(
+            key,
+            lit,
+            layer,
+            np.array(glare_boxes).reshape(-1, 4),
+            lambda still: self.scene.sway(t_s, levels, still, relit=True),
+        )
+        return True
+
+    def _truth(
+        self,
+        agents: list[AgentState],
+        drawn: list[DrawnAgent],
+        labels: np.ndarray,
+    ) -> tuple[TruthObject, ...]:
+        fw, fh = self.camera.width_px, self.camera.height_px
+        drawn = sorted(drawn, key=lambda d: d.index)
+        rois = np.array([d.roi for d in drawn], np.int64)
+        # visible canvas pixels and the frame box of each agent's labelled pixels
+        stats = np.empty((len(drawn), 5), np.int64)
+        wanted = np.array([d.label for d in drawn], np.int64)
+        label_stats(labels, *self._frame_uv, self._shown_at, wanted, rois, stats)
+        px, py, hx, hy = self._forward_axis
+        out = []
+        for d, (visible_px, x, y, x1, y1) in zip(drawn, stats.tolist(), strict=True):
+            if visible_px == 0 or x1 <= x:
+                continue
+            bw, bh = x1 - x, y1 - y
+            touches = x == 0 or y == 0 or x + bw == fw or y + bh == fh
+            hidden = 1.0 - min(visible_px / d.silhouette_px, 1.0)
+            agent = agents[d.index]
+            out.append(
+                TruthObject(
+                    agent.object_id,
+                    agent.cls,
+                    int(x),
+                    int(y),
+                    int(bw),
+                    int(bh),
+                    bool(touches),
+                    bool(not touches and hidden <= MAX_HIDDEN_FRACTION),
+                    # the forward ground distance of the footprint centre (eq. 4's quantity)
+                    float((agent.x_m - px) * hx + (agent.y_m - py) * hy),
+                )
+            )
+        return tuple(out)

@@ -1,0 +1,207 @@
+"""Top-down plot of a street: lanes, sidewalks, scenery, lamps, camera footprints, tracks.
+
+``plot_topdown(street, cameras, tracks, path)`` writes a PNG (matplotlib's Agg
+backend through a bare ``Figure``, so no global pyplot state). A camera's
+footprint is the ground its image border back-projects to (through its lens
+distortion), cut at ``FOOTPRINT_RANGE_M`` of forward distance - rays above the
+horizon are cut there as well.
+
+Conventions: world frame of DESIGN.md (x along the street, y across it, m);
+tracks are ``{object_id: (T, 2) array of (x_m, y_m)}``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Ellipse, Polygon, Rectangle
+
+from citysim.world.street import Street
+from detector.camera import CameraModel
+
+FOOTPRINT_RANGE_M = 50.0
+BORDER_SAMPLES_PER_EDGE = 48
+
+#: StaticObject.kind -> face colour on the plot.
+SCENERY_COLOURS: dict[str, str] = {
+    "wall": "#8c7b6b",
+    "building": "#a89f91",
+    "hedge": "#4f7942",
+    "tree": "#2e8b57",
+    "parked_car": "#4a6fa5",
+    "pole": "#555555",
+}
+
+
+def camera_footprint_m(camera: CameraModel, range_m: float = FOOTPRINT_RANGE_M) -> np.ndarray:
+    """(M, 2) ground polygon (x, y) seen by ``camera``, cut at ``range_m`` forward distance.
+
+    The image border is walked clockwise from the top-left pixel; each border
+    pixel's ray (undistorted) meets the ground, or, if it meets it beyond the
+    range or not at all (above the horizon), is replaced by the point at the
+    range along the ray's bearing. Rays pointing backwards are dropped.
+    """
+    w, h = camera.width_px, camera.height_px
+    n = BORDER_SAMPLES_PER_EDGE
+    top = np.column_stack([np.linspace(-0.5, w - 0.5, n), np.full(n, -0.5)])
+    right = np.column_stack([np.full(n, w - 0.5), np.linspace(-0.5, h - 0.5, n)])
+    bottom = np.column_stack([np.linspace(w - 0.5, -0.5, n), np.full(n, h - 0.5)])
+    left = np.column_stack([np.full(n, -0.5), np.linspace(h - 0.5, -0.5, n)])
+    border = np.concatenate([top, right, bottom, left])
+    und = camera.undistort_pixels(border)
+    rays_cam = np.column_stack(
+        [
+            (und[:, 0] - camera.cx_px) / camera.fx_px,
+            (und[:, 1] - camera.cy_px) / camera.fy_px,
+            np.ones(len(und)),
+        ]
+    )
+    rays = rays_cam @ camera.rotation_world_to_cam
+    foot = camera.position_m[:2]
+    heading = camera.heading_unit
+    horiz = rays[:, :2]
+    along = horiz @ heading
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s_ground = np.where(rays[:, 2] < 0.0, camera.height_m / -rays[:, 2], np.inf)
+        forward_ground = s_ground * along
+        s_cap = range_m / along
+    s = np.where((forward_ground <= range_m) & np.isfinite(forward_ground), s_ground, s_cap)
+    keep = (along > 1e-9) | ((rays[:, 2] < 0.0) & (forward_ground <= range_m))
+    return foot + horiz[keep] * s[keep, None]
+
+
+def plot_topdown(
+    street: Street,
+    cameras: Sequence[CameraModel],
+    tracks: Mapping[int, np.ndarray] | None,
+    path: str | Path,
+) -> Path:
+    """Draw the street from above and write it to ``path`` (PNG); returns the path."""
+    path = Path(path)
+    y_lo, y_hi = street.y_min_m - 6.0, street.y_max_m + 6.0
+    span_x = street.length_m + 10.0
+    fig = Figure(
+        figsize=(min(max(6.0, span_x / 8.0), 24.0), max(3.0, (y_hi - y_lo) / 6.0)), dpi=100
+    )
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 1, 1)
+    ax.set_facecolor("#c9d7b8")  # verge
+    x0, x1 = 0.0, street.length_m
+
+    for sw in street.sidewalks:
+        ax.add_patch(
+            Rectangle(
+                (x0, sw.y_center_m - sw.width_m / 2), x1 - x0, sw.width_m, color="#d9d4cc", zorder=1
+            )
+        )
+    lanes = sorted(street.lanes, key=lambda lane: lane.y_center_m)
+    for lane in lanes:
+        ax.add_patch(
+            Rectangle(
+                (x0, lane.y_center_m - lane.width_m / 2),
+                x1 - x0,
+                lane.width_m,
+                color="#5b5b5b",
+                zorder=1,
+            )
+        )
+        for xa in np.arange(x0 + 5.0, x1, 20.0):  # direction arrows
+            ax.annotate(
+                "",
+                xy=(xa + 3.0 * lane.direction, lane.y_center_m),
+                xytext=(xa, lane.y_center_m),
+                arrowprops={"arrowstyle": "->", "color": "#e8e8e8", "lw": 1.0},
+                zorder=2,
+            )
+    for a, b in zip(lanes[:-1], lanes[1:], strict=True):
+        y_line = (a.y_center_m + a.width_m / 2 + b.y_center_m - b.width_m / 2) / 2
+        style = "--" if a.direction == b.direction else "-"
+        ax.plot([x0, x1], [y_line, y_line], style, color="white", lw=1.0, zorder=2)
+
+    for obj in street.scenery:
+        colour = SCENERY_COLOURS.get(obj.kind, "#999999")
+        if obj.kind == "tree":
+            ax.add_patch(
+                Ellipse(
+                    (obj.x_m, obj.y_m), obj.length_m, obj.width_m, color=colour, alpha=0.8, zorder=3
+                )
+            )
+        else:
+            ax.add_patch(
+                Rectangle(
+                    (obj.x_m - obj.length_m / 2, obj.y_m - obj.width_m / 2),
+                    obj.length_m,
+                    obj.width_m,
+                    color=colour,
+                    zorder=3,
+                )
+            )
+
+    for cam in cameras:
+        poly = camera_footprint_m(cam)
+        if len(poly) >= 3:
+            ax.add_patch(
+                Polygon(
+                    poly,
+                    closed=True,
+                    facecolor="#ffd54f",
+                    edgecolor="#c79100",
+                    alpha=0.25,
+                    zorder=4,
+                )
+            )
+        ax.plot(
+            [cam.x_m], [cam.y_m], marker=(3, 0, cam.yaw_deg - 90.0), color="#c79100", ms=9, zorder=6
+        )
+
+    if street.lamps:
+        lx = [lamp.x_m for lamp in street.lamps]
+        ly = [lamp.y_m for lamp in street.lamps]
+        ax.scatter(
+            lx,
+            ly,
+            marker="*",
+            s=140,
+            color="#ffeb3b",
+            edgecolors="black",
+            linewidths=0.6,
+            zorder=7,
+            label="lamp",
+        )
+        for lamp in street.lamps:
+            ax.plot([lamp.zone_start_m, lamp.zone_end_m], [y_lo + 1.0, y_lo + 1.0], lw=3, zorder=5)
+            ax.annotate(
+                str(lamp.index),
+                (lamp.x_m, lamp.y_m),
+                xytext=(4, 4),
+                textcoords="offset points",
+                fontsize=7,
+            )
+
+    if tracks:
+        colours = fig.colormaps["tab10"] if hasattr(fig, "colormaps") else None
+        for k, (object_id, xy) in enumerate(sorted(tracks.items())):
+            pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+            if len(pts) == 0:
+                continue
+            colour = colours(k % 10) if colours is not None else None
+            ax.plot(pts[:, 0], pts[:, 1], "-", lw=1.2, color=colour, zorder=8)
+            ax.plot(pts[0, 0], pts[0, 1], "o", ms=3, color=colour, zorder=8)
+            ax.annotate(str(object_id), pts[-1], fontsize=6, color=colour, zorder=8)
+
+    ax.set_xlim(x0 - 5.0, x1 + 5.0)
+    ax.set_ylim(y_lo, y_hi)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x along the street (m)")
+    ax.set_ylabel("y across (m)")
+    ax.set_title(
+        f"Street {street.length_m:.0f} m, {len(street.lamps)} lamps, {len(cameras)} cameras"
+    )
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, format="png")
+    return path

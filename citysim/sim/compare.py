@@ -1,0 +1,151 @@
+"""Run every controller of a comparison on the same night and write the run folder.
+
+Each controller is an independent simulation of the same scenario and seed,
+so they can run in parallel processes (``workers``); the traffic they see is
+identical because no random stream depends on the controller. The run folder
+is staged and moved into place only when every controller finished:
+
+    DIR/summary.json   figures per controller (see README)
+    DIR/objects.csv    one row per object and lamp zone it crossed
+    DIR/lamps.csv      level and power of every lamp, every simulated second
+    DIR/plots/*.png    energy, lamp levels with passages, lag CDF per class
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import multiprocessing as mp
+import os
+import queue
+import shutil
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from tqdm import tqdm
+
+from citysim.config.scenario import ControllerSpec, Scenario
+from citysim.control.controllers import CONTROLLERS
+from citysim.sim.loop import (
+    LAMPS_CSV_HEADER,
+    OBJECTS_CSV_HEADER,
+    check_controllers,
+    controller_spec,
+    run_to_files,
+)
+from detector.outdir import staged_output
+
+
+def resolve_controllers(scenario: Scenario, names: Sequence[str] | None) -> list[ControllerSpec]:
+    """The specs to run: the scenario's own list, or the names given (with always_on first, always)."""
+    specs = list(scenario.controllers) if not names else [controller_spec(scenario, n) for n in names]
+    check_controllers([s.name for s in specs])
+    if not any(s.name == "always_on" for s in specs):
+        specs.insert(0, ControllerSpec(name="always_on"))  # savings are always against always-on, same run
+    return specs
+
+
+def _worker(args):
+    scenario, spec, part_dir, progress_queue = args
+    last = [0.0]
+
+    def report(dt_s: float) -> None:
+        last[0] += dt_s
+        if progress_queue is not None and last[0] >= 5.0:
+            progress_queue.put(last[0])
+            last[0] = 0.0
+
+    summary = run_to_files(scenario, spec, Path(part_dir), on_progress=report)
+    if progress_queue is not None and last[0] > 0:
+        progress_queue.put(last[0])
+    return spec.display_name, summary
+
+
+def run_comparison(
+    scenario: Scenario,
+    controllers: Sequence[str] | None = None,
+    *,
+    progress: bool = False,
+    out_dir: Path | None = None,
+    workers: int = 1,
+    scenario_file: str | None = None,
+    plots: bool = True,
+) -> dict:
+    """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder.
+
+    ``plots=False`` skips the PNGs (a sweep point keeps only its figures and objects.csv).
+    """
+    specs = resolve_controllers(scenario, controllers)
+    workers = max(1, min(workers, len(specs)))
+    summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
+               "duration_s": scenario.duration_s, "lamps": None, "controllers": {}}
+    with staged_output(out_dir) if out_dir is not None else _scratch() as stage:
+        parts = stage / ".parts"
+        total_s = scenario.duration_s * len(specs)
+        bar = tqdm(total=total_s, unit="sim s", desc=f"{scenario.name}: {len(specs)} controllers", disable=not progress,
+                   bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
+        results: dict[str, dict] = {}
+        if workers == 1:
+            for spec in specs:
+                results[spec.display_name] = run_to_files(scenario, spec, parts, on_progress=bar.update)
+        else:
+            with mp.Manager() as manager:
+                q = manager.Queue()
+                ctx = mp.get_context("spawn")  # fresh interpreters: no forked OpenCV/pymunk state
+                with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+                    # camera controllers first: the cheap ones fill the gaps at the end
+                    heavy_first = sorted(specs, key=lambda s: not CONTROLLERS[s.name].uses_camera)
+                    futures = [pool.submit(_worker, (scenario, spec, str(parts), q)) for spec in heavy_first]
+                    pending = set(futures)
+                    while pending:
+                        try:
+                            bar.update(q.get(timeout=0.2))
+                        except queue.Empty:
+                            pass
+                        for f in [f for f in pending if f.done()]:
+                            pending.discard(f)
+                            label, result = f.result()
+                            results[label] = result
+                    while not q.empty():
+                        bar.update(q.get())
+        bar.close()
+        for spec in specs:
+            summary["controllers"][spec.display_name] = results[spec.display_name]
+        summary["lamps"] = scenario.lamps.count or len(scenario.lamps.positions_x_m)
+        _merge_parts(parts, [s.display_name for s in specs], stage)
+        shutil.rmtree(parts, ignore_errors=True)
+        (stage / "summary.json").write_text(json.dumps(summary, indent=2))
+        if out_dir is not None and plots:
+            from citysim.report.run_plots import plot_run
+
+            plot_run(stage)
+    return summary
+
+
+def _merge_parts(parts: Path, labels: list[str], stage: Path) -> None:
+    for kind, header in (("lamps", LAMPS_CSV_HEADER), ("objects", OBJECTS_CSV_HEADER)):
+        with open(stage / f"{kind}.csv", "w", newline="") as out:
+            csv.writer(out).writerow(header)
+            for label in labels:
+                part = parts / f"{label}.{kind}.csv"
+                if part.exists():
+                    with open(part) as fh:
+                        shutil.copyfileobj(fh, out)
+
+
+class _scratch:
+    """A throw-away staging folder when no run folder is wanted."""
+
+    def __enter__(self) -> Path:
+        import tempfile
+
+        self._dir = Path(tempfile.mkdtemp(prefix="citysim-run-"))
+        return self._dir
+
+    def __exit__(self, *exc) -> None:
+        shutil.rmtree(self._dir, ignore_errors=True)
+
+
+def default_workers() -> int:
+    return max(1, min(2, os.cpu_count() or 1))

@@ -1,0 +1,3 @@
+"""The street world: street geometry, road-user kinds, traffic and the moving (pymunk) world.
+
+Imports config and detector; never render, control, metrics or sim (a renderer reads the world)."""

@@ -1,0 +1,233 @@
+"""The static street: lanes, sidewalks, kerbs, the lamp chain and scenery.
+
+Pure geometry and reflectances, built once per scenario; the world moves agents
+over it and the renderer paints it. Conventions: world frame of DESIGN.md (x
+along the street from 0 to ``length_m``, y across it, z up, m). Lane and
+sidewalk positions are given by the y of their centre line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from detector.camera import CameraModel
+
+if TYPE_CHECKING:
+    from citysim.config.scenario import Scenario
+    from citysim.config.street import ScenerySpec
+
+#: Walkers passing each other may step this far beyond a sidewalk's outer edge (verge), m.
+VERGE_STEP_M = 0.5
+#: ... and this far off the kerb into the road, m.
+ROAD_STEP_M = 1.0
+
+
+@dataclass(frozen=True)
+class Lane:
+    y_center_m: float
+    width_m: float
+    direction: int  # +1: traffic moves toward +x; -1: toward -x
+
+
+@dataclass(frozen=True)
+class Sidewalk:
+    y_center_m: float
+    width_m: float
+
+
+@dataclass(frozen=True)
+class StaticObject:
+    """A box standing on the ground (wall, tree crown on a trunk, parked car, pole)."""
+
+    kind: str  # 'wall' | 'building' | 'tree' | 'parked_car' | 'pole' | 'hedge'
+    x_m: float  # centre of the footprint
+    y_m: float
+    length_m: float  # along x
+    width_m: float  # along y
+    height_m: float
+    ir_reflectance: float  # 0..1, near-infrared
+
+
+@dataclass(frozen=True)
+class LampSite:
+    """One lamp pole with its luminaire and camera (camera already placed in world)."""
+
+    index: int
+    x_m: float
+    y_m: float
+    pole_height_m: float
+    camera: CameraModel  # x_m, y_m, yaw_deg set to this pole
+    zone_start_m: float  # the stretch of street (x) this lamp is responsible for
+    zone_end_m: float
+
+
+@dataclass(frozen=True)
+class Street:
+    length_m: float
+    lanes: tuple[Lane, ...]
+    sidewalks: tuple[Sidewalk, ...]
+    lamps: tuple[LampSite, ...]
+    scenery: tuple[StaticObject, ...] = ()
+    kerb_height_m: float = 0.12
+    road_ir_reflectance: float = 0.25
+    sidewalk_ir_reflectance: float = 0.35
+    verge_ir_reflectance: float = 0.2  # grass / gravel beyond the sidewalks
+    crossings_x_m: tuple[
+        float, ...
+    ] = ()  # where pedestrians prefer to cross (the renderer may mark them)
+
+    @property
+    def road_center_y_m(self) -> float:
+        """Mean of the lane centre lines (0 without lanes), m."""
+        return sum(lane.y_center_m for lane in self.lanes) / len(self.lanes) if self.lanes else 0.0
+
+    def outward(self, sidewalk: Sidewalk) -> float:
+        """+1 if the sidewalk's outer (verge) side is toward +y, else -1."""
+        return 1.0 if sidewalk.y_center_m >= self.road_center_y_m else -1.0
+
+    def walking_room_m(self, sidewalk: Sidewalk) -> tuple[float, float]:
+        """(y_lo, y_hi) walkers may use on this sidewalk: the sidewalk plus the verge and
+        road strips they step onto when passing each other, m."""
+        half = sidewalk.width_m / 2
+        if self.outward(sidewalk) > 0:
+            return (
+                sidewalk.y_center_m - half - ROAD_STEP_M,
+                sidewalk.y_center_m + half + VERGE_STEP_M,
+            )
+        return sidewalk.y_center_m - half - VERGE_STEP_M, sidewalk.y_center_m + half + ROAD_STEP_M
+
+    def zone_of(self, x_m: float) -> int:
+        """Index of the lamp whose zone holds x (clipped to the street)."""
+        for lamp in self.lamps:
+            if x_m < lamp.zone_end_m:
+                return lamp.index
+        return len(self.lamps) - 1
+
+    @property
+    def y_min_m(self) -> float:
+        edges = [s.y_center_m - s.width_m / 2 for s in self.sidewalks] + [
+            lane.y_center_m - lane.width_m / 2 for lane in self.lanes
+        ]
+        return min(edges)
+
+    @property
+    def y_max_m(self) -> float:
+        edges = [s.y_center_m + s.width_m / 2 for s in self.sidewalks] + [
+            lane.y_center_m + lane.width_m / 2 for lane in self.lanes
+        ]
+        return max(edges)
+
+
+# --------------------------------------------------------------------- builder
+#: Random stream id for scenery placement, so scenery never shifts the traffic.
+SCENERY_STREAM = 0x5CE7E
+
+
+def build_street(scenario: Scenario, rng: np.random.Generator | None = None) -> Street:
+    """The street of a scenario: lanes, sidewalks, the lamp chain with placed cameras, scenery.
+
+    Scenery is placed at random from ``rng``; by default from the scenery seed
+    (``street.scenery.seed``, else the scenario seed), so one scenario always
+    has the same street whatever else draws random numbers.
+    """
+    spec, lamps = scenario.street, scenario.lamps
+    if rng is None:
+        seed = spec.scenery.seed if spec.scenery.seed is not None else scenario.seed
+        rng = np.random.default_rng([seed, SCENERY_STREAM])
+    base = lamps.camera_model
+    sites = tuple(
+        LampSite(
+            index=i,
+            x_m=x,
+            y_m=lamps.y_m,
+            pole_height_m=lamps.pole_height_m,
+            camera=base.placed(x_m=x, y_m=lamps.y_m),
+            zone_start_m=z0,
+            zone_end_m=z1,
+        )
+        for i, (x, (z0, z1)) in enumerate(
+            zip(lamps.positions_x_m, lamps.zones(spec.length_m), strict=True)
+        )
+    )
+    street = Street(
+        length_m=spec.length_m,
+        lanes=tuple(Lane(s.y_center_m, s.width_m, s.direction) for s in spec.lanes),
+        sidewalks=tuple(Sidewalk(s.y_center_m, s.width_m) for s in spec.sidewalks),
+        lamps=sites,
+        kerb_height_m=spec.kerb_height_m,
+        crossings_x_m=tuple(spec.crossings_x_m),
+    )
+    poles = tuple(StaticObject("pole", s.x_m, s.y_m, 0.2, 0.2, s.pole_height_m, 0.4) for s in sites)
+    return replace(street, scenery=poles + _place_scenery(street, spec.scenery, poles, rng))
+
+
+@dataclass(frozen=True)
+class _SceneryRow:
+    """A row of scenery along each side: one of ``kinds`` (kind, width range m or None
+    for square, IR reflectance) drawn per object, centred ``offset_m`` outward from
+    the verge strip walkers use."""
+
+    kinds: tuple[tuple[str, tuple[float, float] | None, float], ...]
+    offset_m: float
+    length_m: tuple[float, float]
+    height_m: tuple[float, float]
+
+
+#: Scenery rows by their density field in ``ScenerySpec``, nearest the street first:
+#: trees on the verge, garden walls or hedges, cars parked before the houses, houses.
+SCENERY_ROWS: dict[str, _SceneryRow] = {
+    "trees_per_100m": _SceneryRow((("tree", None, 0.3),), 2.1, (2.0, 4.0), (4.0, 9.0)),
+    "walls_per_100m": _SceneryRow(
+        (("wall", (0.25, 0.35), 0.45), ("hedge", (0.6, 1.0), 0.25)), 4.6, (5.0, 20.0), (1.0, 1.8)
+    ),
+    "parked_cars_per_100m": _SceneryRow(
+        (("parked_car", (1.4, 1.8), 0.5),), 6.2, (3.7, 4.6), (1.4, 1.8)
+    ),
+    "buildings_per_100m": _SceneryRow(
+        (("building", (8.0, 12.0), 0.35),), 13.0, (8.0, 15.0), (5.0, 9.0)
+    ),
+}
+
+
+def _place_scenery(
+    street: Street, spec: ScenerySpec, poles: tuple[StaticObject, ...], rng: np.random.Generator
+) -> tuple[StaticObject, ...]:
+    """Poisson-many objects per row and side, uniform along x; an object that would touch
+    its row neighbour or a pole is dropped."""
+    out: list[StaticObject] = []
+    edges = [
+        (lane.y_center_m - lane.width_m / 2, lane.y_center_m + lane.width_m / 2)
+        for lane in street.lanes
+    ]
+    edges += [
+        (s.y_center_m - s.width_m / 2, s.y_center_m + s.width_m / 2) for s in street.sidewalks
+    ]
+    lo_edge, hi_edge = min(e[0] for e in edges), max(e[1] for e in edges)
+    for side, y_edge in ((-1.0, lo_edge), (1.0, hi_edge)):
+        for field, row in SCENERY_ROWS.items():
+            n = rng.poisson(getattr(spec, field) * street.length_m / 100.0)
+            xs = np.sort(rng.uniform(0.0, street.length_m, size=n))
+            last_end = -np.inf
+            for x in xs:
+                kind, width_range, reflectance = row.kinds[int(rng.integers(len(row.kinds)))]
+                length = float(rng.uniform(*row.length_m))
+                width = length if width_range is None else float(rng.uniform(*width_range))
+                y = y_edge + side * (VERGE_STEP_M + row.offset_m)
+                obj = StaticObject(
+                    kind, float(x), y, length, width, float(rng.uniform(*row.height_m)), reflectance
+                )
+                if x - length / 2 < last_end + 0.5 or any(_overlaps(obj, p, 0.3) for p in poles):
+                    continue
+                out.append(obj)
+                last_end = x + length / 2
+    return tuple(out)
+
+
+def _overlaps(a: StaticObject, b: StaticObject, margin_m: float) -> bool:
+    return (
+        abs(a.x_m - b.x_m) < (a.length_m + b.length_m) / 2 + margin_m
+        and abs(a.y_m - b.y_m) < (a.width_m + b.width_m) / 2 + margin_m
+    )

@@ -1,0 +1,1 @@
+"""Speed and memory figures (make bench): detector against OpenCV's floor, renderer, simulation, sweeps."""
