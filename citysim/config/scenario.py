@@ -41,7 +41,8 @@ __all__ = [
 
 
 class EnvironmentSpec(Spec):
-    """Conditions the cameras see (contract F)."""
+    """What the night is like for the cameras: light, weather, wind, insects, and the camera
+    sensor's noise, exposure and lens. The renderer reads this very object."""
 
     time_of_day: Literal["night", "day"] = "night"
     weather: Literal["clear", "rain"] = "clear"
@@ -55,6 +56,14 @@ class EnvironmentSpec(Spec):
     sensor_noise_std_dn: float = Field(default=3.0, ge=0, le=64)
     exposure_ms: float = Field(default=30.0, gt=0, le=1000)
     lens_distortion: bool = True
+    rain_drops_per_frame: int = Field(
+        default=120, ge=0, le=100_000, description="rain streaks per frame when weather is rain"
+    )
+
+    @property
+    def ambient_light(self) -> float:
+        """Daylight on the scene, 0 (night: only lamps and the IR emitter) to 1 (day)."""
+        return 1.0 if self.time_of_day == "day" else 0.0
 
 
 class NeighboursAhead(Spec):
@@ -71,7 +80,9 @@ class NetworkSpec(Spec):
 
     latency_ms: float = Field(default=20.0, ge=0, le=10000)
     jitter_ms: float = Field(default=5.0, ge=0, le=10000)
-    loss_probability: float = Field(default=0.01, ge=0, lt=1)
+    loss_probability: float = Field(
+        default=0.01, ge=0, le=1, description="share of message copies lost (1: a dead radio)"
+    )
     repeat_s: float = Field(
         default=3.0, gt=0, le=600, description="a lit lamp repeats its message this often"
     )

@@ -24,26 +24,34 @@ from typing import ClassVar
 import numpy as np
 
 from citysim.world.agents import AgentState
-from citysim.config.scenario import ControllerSpec, NeighboursAhead
+from citysim.config.scenario import ControllerSpec
+from citysim.config.street import LuminaireSpec
 from citysim.control.lamps import Lamp
+from citysim.control.network import Network
 from citysim.world.street import Street
 from detector.segment import Segmenter, SegmenterParams
 
 
 @dataclass
 class ControlContext:
-    """What every controller may read: the street, the lamps and the network."""
+    """What every controller may read: the street, the lamps, their luminaire and the network."""
 
     street: Street
     lamps: list[Lamp]
-    hold_s: float
-    dim_level: float
+    luminaire: LuminaireSpec  # the scenario's, with the controller's own hold_s if it sets one
     frame_period_s: float
     rng: np.random.Generator
-    network: object | None = None  # citysim.control.network.Network for networked controllers
+    network: Network
     start_hour: float = 22.0
     spec: ControllerSpec = field(default_factory=lambda: ControllerSpec(name="always_on"))
-    neighbours_ahead: NeighboursAhead = field(default_factory=NeighboursAhead)
+
+    @property
+    def hold_s(self) -> float:
+        return self.luminaire.hold_s
+
+    @property
+    def dim_level(self) -> float:
+        return self.luminaire.dim_level
 
 
 class LampBank:
@@ -99,7 +107,7 @@ class Controller:
         pass
 
     def motion_seen(self, lamp_index: int) -> bool:
-        """Does this lamp's camera need every frame now? (see ``citysim.sim.loop.CameraSchedule``)
+        """Does this lamp's camera need every frame now? (see ``citysim.sim.cameras.CameraSchedule``)
 
         True while its last judged frame held a moving region.
         """
@@ -194,7 +202,7 @@ class PassiveInfrared(Controller):
 class BackgroundClock:
     """Frames each lamp camera has *taken* since its background model was (re)built.
 
-    The simulator judges an idle camera only now and then (``citysim.sim.loop.CameraSchedule``), but
+    The simulator judges an idle camera only now and then (``citysim.sim.cameras.CameraSchedule``), but
     the camera takes every frame. MOG2's automatic learning rate, 1 / min(2 n, history), counts
     frames fed; fed one frame a second, a young model would learn 15 times too fast and swallow a
     car coming head-on. So each judged frame is fed at the rate of the frames taken.
@@ -362,8 +370,8 @@ class DetectorNetwork(DetectorConfirmed):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        self.lamps_ahead = ctx.neighbours_ahead.model_dump()
-        self.repeat_s = float(getattr(getattr(ctx.network, "spec", None), "repeat_s", 3.0))
+        self.lamps_ahead = ctx.network.spec.neighbours_ahead.model_dump()
+        self.repeat_s = ctx.network.spec.repeat_s
         self.last_sent_s = np.full(len(ctx.lamps), -math.inf)
         self.last_x_m: list[dict[int, tuple[float, float]]] = [{} for _ in ctx.lamps]
 
@@ -388,7 +396,7 @@ class DetectorNetwork(DetectorConfirmed):
             return detections
         self.bank.trigger(lamp_index, t_s)
         targets = [d for d in detections if d.cls != "noise" and d.p_target >= self.detectors[lamp_index].target_threshold]
-        if not targets or self.ctx.network is None or t_s - self.last_sent_s[lamp_index] < self.repeat_s:
+        if not targets or t_s - self.last_sent_s[lamp_index] < self.repeat_s:
             if targets:
                 # keep tracking directions between notifications
                 for d in targets:

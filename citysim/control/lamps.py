@@ -17,8 +17,9 @@ one linear ramp then a flat stretch, whose integrals are exact, so energy does
 not depend on how often ``advance`` is called. A plain always-on lamp (level 1,
 no sensing, no controllable driver) uses exactly ``rated_power_w * duration_s``.
 
-Hold times are the controller's business, not the lamp's: ``hold_s`` is carried
-in the spec so every controller reads the same number, but a lamp never drops
+The spec is the scenario's ``lamps.luminaire`` (``citysim.config.street.LuminaireSpec``),
+validated there once. Hold times are the controller's business, not the lamp's: ``hold_s``
+is carried in the spec so every controller reads the same number, but a lamp never drops
 its level by itself. The controller calls ``set_target(t, dim_level)`` once the
 hold since its last detection has expired.
 
@@ -29,8 +30,9 @@ forward (``advance``/``set_target`` with an earlier time raise ``ValueError``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from numbers import Real
+
+from citysim.config.street import LuminaireSpec
 
 
 def check_number(owner: str, name: str, value: object, low: float, high: float = math.inf) -> None:
@@ -43,37 +45,6 @@ def check_number(owner: str, name: str, value: object, low: float, high: float =
     if not low <= value <= high:
         valid = f">= {low}" if high == math.inf else f"in [{low}, {high}]"
         raise ValueError(f"{owner}.{name} must be {valid}, got {value!r}")
-
-
-@dataclass(frozen=True)
-class LuminaireSpec:
-    """One luminaire type. Powers in W, times in s, levels as fractions of full light.
-
-    Defaults: a 60 W LED street luminaire (typical 60-70 W), idling at 20 %,
-    a 0.5 W DALI driver standby, the paper's 0.3 s switch-up, a 1 s fade, a
-    30 s hold after the last detection and about 5 W for camera + board + IR
-    emitter.
-    """
-
-    rated_power_w: float = 60.0
-    dim_level: float = 0.2
-    standby_power_w: float = 0.5
-    ramp_up_s: float = 0.3
-    fade_s: float = 1.0
-    hold_s: float = 30.0
-    sensing_power_w: float = 5.0
-
-    def __post_init__(self) -> None:
-        for name in (
-            "rated_power_w",
-            "standby_power_w",
-            "sensing_power_w",
-            "ramp_up_s",
-            "fade_s",
-            "hold_s",
-        ):
-            check_number("LuminaireSpec", name, getattr(self, name), 0.0)
-        check_number("LuminaireSpec", "dim_level", self.dim_level, 0.0, 1.0)
 
 
 def always_on_energy_j(n_lamps: int, spec: LuminaireSpec, duration_s: float) -> float:

@@ -7,7 +7,7 @@ that survives arrives in the receiver's inbox (a ``simpy.Store``) after
 
 Repeating is the sender's business: the paper's lamps repeat their neighbour
 notifications every 3 s while the object is present, which is what makes a
-lossy link usable. ``LinkSpec.repeat_s`` carries that period so every
+lossy link usable. ``NetworkSpec.repeat_s`` (the scenario's ``network``) carries that period so every
 controller reads the same number; ``Network`` sends each call once.
 
 Times: simpy's clock in seconds; link parameters in milliseconds as named.
@@ -26,23 +26,8 @@ from typing import Any
 import numpy as np
 import simpy
 
+from citysim.config.scenario import NetworkSpec
 from citysim.control.lamps import check_number
-
-
-@dataclass(frozen=True)
-class LinkSpec:
-    """A lamp-to-lamp radio link: base latency and jitter in ms, loss per copy, repeat period in s."""
-
-    latency_ms: float = 20.0
-    jitter_ms: float = 5.0
-    loss_probability: float = 0.01
-    repeat_s: float = 3.0
-
-    def __post_init__(self) -> None:
-        check_number("LinkSpec", "latency_ms", self.latency_ms, 0.0)
-        check_number("LinkSpec", "jitter_ms", self.jitter_ms, 0.0)
-        check_number("LinkSpec", "loss_probability", self.loss_probability, 0.0, 1.0)
-        check_number("LinkSpec", "repeat_s", self.repeat_s, 0.0)
 
 
 @dataclass(frozen=True)
@@ -67,7 +52,6 @@ class NetworkStats:
     sent: int = 0
     delivered: int = 0
     lost: int = 0
-    delay_sum_s: float = 0.0
     delay_min_s: float = math.inf
     delay_max_s: float = 0.0
     by_kind: dict[str, int] = field(default_factory=dict)  # copies sent per message kind
@@ -81,21 +65,17 @@ class NetworkStats:
         decided = self.delivered + self.lost
         return self.lost / decided if decided else 0.0
 
-    @property
-    def mean_delay_s(self) -> float:
-        return self.delay_sum_s / self.delivered if self.delivered else math.nan
-
 
 class Network:
     """All links of one run. ``inbox(i)`` is lamp i's ``simpy.Store`` of delivered ``Message``s."""
 
     def __init__(
-        self, env: simpy.Environment, n_lamps: int, spec: LinkSpec, rng: np.random.Generator
+        self, env: simpy.Environment, n_lamps: int, spec: NetworkSpec, rng: np.random.Generator
     ) -> None:
         if isinstance(n_lamps, bool) or not isinstance(n_lamps, int) or n_lamps < 1:
             raise ValueError(f"Network.n_lamps must be an int >= 1, got {n_lamps!r}")
-        if not isinstance(spec, LinkSpec):
-            raise ValueError(f"Network.spec must be a LinkSpec, got {type(spec).__name__}")
+        if not isinstance(spec, NetworkSpec):
+            raise ValueError(f"Network.spec must be a NetworkSpec, got {type(spec).__name__}")
         if not isinstance(rng, np.random.Generator):
             raise ValueError(
                 f"Network.rng must be a numpy.random.Generator, got {type(rng).__name__}"
@@ -153,7 +133,6 @@ class Network:
     def _deliver(self, message: Message, receiver: int, delay_s: float) -> None:
         stats = self.stats
         stats.delivered += 1
-        stats.delay_sum_s += delay_s
         stats.delay_min_s = min(stats.delay_min_s, delay_s)
         stats.delay_max_s = max(stats.delay_max_s, delay_s)
         self._inboxes[receiver].put(

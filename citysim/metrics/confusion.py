@@ -15,6 +15,7 @@ import numpy as np
 
 from citysim.world.agents import TARGET_CLASSES
 from citysim.control.lamps import check_number
+from citysim.metrics.collector import Collector
 
 #: Detector class order (detector.classifier.CLASSES): rows/columns of ``confusion_5``.
 CONFUSION_CLASSES = ("noise", *TARGET_CLASSES)
@@ -209,3 +210,18 @@ class DetectionConfusion:
             "miss_rate": ratio(missed, eligible),
             "miss_rate_by_class": {c: ratio(v[1], v[0]) for c, v in self._pass_counts.items()},
         }
+
+
+class ConfusionCollector(Collector):
+    """Feeds every judged frame to a ``DetectionConfusion``; its summary goes under ``detection``."""
+
+    def __init__(self) -> None:
+        self.confusion = DetectionConfusion()
+
+    def on_frame(self, lamp_index: int, t_s: float, truth: Sequence, detections: Sequence | None) -> None:
+        if detections is not None:
+            self.confusion.add(truth, detections, lamp_index, t_s)
+
+    def finish(self, t_end_s: float) -> dict[str, Any]:
+        self.confusion.finish()
+        return {"detection": self.confusion.summary() if self.confusion.frames else {}}

@@ -1,41 +1,19 @@
-"""Run metrics: energy against always-on, illumination lag and dark exposure, detection confusion.
+"""Energy of a run: the lamps' draw against always-on lighting of the same night, per hour.
 
-The one import point for the simulator's summary. Everything streams: nothing
-keeps per-step history, memory stays flat however long the night.
-
-* ``energy_summary`` (here): energy of the lamps of one run vs the always-on
-  baseline of the same run.
-* ``ZoneTracker`` (``metrics_zones``): per object and lamp zone, entry time,
-  lag to the required light and dark seconds; p50/p95/max per class.
-* ``DetectionConfusion`` (``metrics_confusion``): binary and 5-class
-  confusion, false positives per frame and region, per-object miss rate.
+``energy_summary`` compares a run's lamps (all advanced to one time) with the always-on
+baseline; ``EnergyCollector`` closes an hourly bin at each whole hour of the run and gives the
+run's energy figures at its end.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
-from citysim.control.lamps import Lamp, check_number
-from citysim.metrics.confusion import (
-    CONFUSION_CLASSES,
-    DetectionConfusion,
-    greedy_match,
-    iou_matrix,
-)
-from citysim.metrics.zones import DEFAULT_LOOKAHEAD_S, ZoneTracker
-from citysim.metrics.quantiles import QuantileSketch
-
-__all__ = [
-    "CONFUSION_CLASSES",
-    "DEFAULT_LOOKAHEAD_S",
-    "DetectionConfusion",
-    "QuantileSketch",
-    "ZoneTracker",
-    "energy_summary",
-    "greedy_match",
-    "iou_matrix",
-]
+from citysim.config.street import LuminaireSpec
+from citysim.control.lamps import Lamp, always_on_energy_j, check_number
+from citysim.metrics.collector import Collector
 
 J_PER_KWH = 3.6e6
 
@@ -68,3 +46,41 @@ def energy_summary(lamps: Sequence[Lamp], always_on_energy_j: float) -> dict[str
         "switches": sum(lamp.switches for lamp in lamps),
         "on_time_s": sum(lamp.on_time_s for lamp in lamps),
     }
+
+
+class EnergyCollector(Collector):
+    """Hourly energy bins (kWh per hour of the run) and the run's energy figures.
+
+    An hour's bin closes at each whole hour of simulated time; the last, possibly partial,
+    bin at the end of the run. Savings are against ``len(lamps)`` always-on luminaires.
+    """
+
+    def __init__(self, lamps: Sequence[Lamp], luminaire: LuminaireSpec):
+        self.lamps = list(lamps)
+        self.luminaire = luminaire
+        self.hourly_kwh: list[float] = []
+        self._last_energy_j = 0.0
+
+    def _close_bin(self, t_s: float) -> None:
+        for lamp in self.lamps:
+            lamp.advance(t_s)
+        energy_j = sum(lamp.energy_j for lamp in self.lamps)
+        self.hourly_kwh.append((energy_j - self._last_energy_j) / J_PER_KWH)
+        self._last_energy_j = energy_j
+
+    def on_second(self, t_s: float) -> None:
+        if t_s > 0 and math.isclose(t_s % 3600.0, 0.0, abs_tol=1e-6):
+            self._close_bin(t_s)
+
+    def finish(self, t_end_s: float) -> dict[str, Any]:
+        self._close_bin(t_end_s)
+        energy = energy_summary(self.lamps, always_on_energy_j(len(self.lamps), self.luminaire, t_end_s))
+        split = ("luminaire_energy_kwh", "standby_energy_kwh", "sensing_energy_kwh")
+        return {
+            "energy_kwh": energy["energy_kwh"],
+            "savings_vs_always_on": energy["savings_vs_always_on"],
+            "switches": energy["switches"],
+            "on_time_s": energy["on_time_s"],
+            "energy_per_hour_kwh": self.hourly_kwh,
+            "energy_split_kwh": {k.removesuffix("_energy_kwh"): energy[k] for k in split},
+        }

@@ -1,6 +1,6 @@
-"""IR-like camera frames of the street, with per-frame ground truth (contract E).
+"""IR-like camera frames of the street, with per-frame ground truth (the renderer's side of the camera model: frames plus what is truly in them).
 
-``CameraRenderer(camera, street, params, rng).render(t_s, agents, lamp_levels)``
+``CameraRenderer(camera, street, environment, rng).render(t_s, agents, lamp_levels)``
 returns an 8-bit grayscale frame as the lamp's camera would see it and, for
 every agent whose silhouette shows in the frame, its class and bounding box.
 
@@ -35,10 +35,11 @@ Agents entirely hidden or out of view are not reported.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
+from citysim.config.scenario import EnvironmentSpec
 from citysim.world.agents import AgentState
 from citysim.render.agents import AgentLighting, AgentPainter, DrawnAgent
 from citysim.render.background import ShadingInputs, StaticScene
@@ -61,54 +62,28 @@ from detector.camera import CameraModel
 #: An agent hidden behind nearer things for more than this fraction is not fully visible.
 MAX_HIDDEN_FRACTION = 0.5
 
-_RANGES: dict[str, tuple[float, float]] = {
-    "ir_emitter_power": (0.0, 1e6),
-    "ambient_light": (0.0, 1.0),
-    "sensor_noise_std_dn": (0.0, 100.0),
-    "exposure_ms": (0.0, 1000.0),
-    "rain_drops_per_frame": (0, 100_000),
-    "insects_per_min": (0.0, 1e4),
-    "wind_mps": (0.0, 60.0),
-}
-
-
 @dataclass(frozen=True)
-class RenderParams:
-    """How the camera and the night look.
+class RenderOptions:
+    """Switches of the renderer itself, not of the night (the night is the scenario's
+    ``EnvironmentSpec``): tests turn effects off to see one at a time.
 
-    ``ir_emitter_power``: radiance x m^2 the IR emitter gives a white surface
-    facing it (1.0 = full scale at 1 m; 100 makes a 0.25-reflectance road 10 m
-    ahead of a 4 m pole read ~70 DN and a walker there ~190 DN). ``ambient_light``: 0 night .. 1 day.
-    ``wind_mps`` drives the crowns' sway (an addition to the contract, with a default).
+    ``ir_emitter_power``: radiance x m^2 the camera's IR emitter gives a white surface facing it
+    (1.0 = full scale at 1 m; 80 makes a 0.25-reflectance road 10 m ahead of a 4 m pole read
+    ~60 DN and a walker there ~170 DN).
     """
 
     ir_emitter_power: float = 80.0
-    ambient_light: float = 0.0
-    sensor_noise_std_dn: float = 3.0
-    exposure_ms: float = 30.0
     motion_blur: bool = True
-    distortion: bool = True
     lamp_light: bool = True
-    rain_drops_per_frame: int = 0
-    insects_per_min: float = 0.0
     branch_sway: bool = True
-    wind_mps: float = 3.0
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name in _RANGES:
-                lo, hi = _RANGES[f.name]
-                if (
-                    not isinstance(value, int | float)
-                    or isinstance(value, bool)
-                    or not lo <= value <= hi
-                ):
-                    raise ValueError(
-                        f"RenderParams.{f.name}: must be a number in [{lo}, {hi}], got {value!r}"
-                    )
-            elif not isinstance(value, bool):
-                raise ValueError(f"RenderParams.{f.name}: must be true or false, got {value!r}")
+        power = self.ir_emitter_power
+        if isinstance(power, bool) or not isinstance(power, int | float) or not 0.0 <= power <= 1e6:
+            raise ValueError(f"RenderOptions.ir_emitter_power: must be a number in [0, 1e6], got {power!r}")
+        for name in ("motion_blur", "lamp_light", "branch_sway"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"RenderOptions.{name}: must be true or false, got {getattr(self, name)!r}")
 
 
 @dataclass(frozen=True)
@@ -136,37 +111,42 @@ class CameraRenderer:
     """Renders one camera's frames; the static scene is prepared once here."""
 
     def __init__(
-        self, camera: CameraModel, street: Street, params: RenderParams, rng: np.random.Generator
+        self,
+        camera: CameraModel,
+        street: Street,
+        environment: EnvironmentSpec,
+        rng: np.random.Generator,
+        options: RenderOptions = RenderOptions(),
     ) -> None:
         self.camera = camera
         self.street = street
-        self.params = params
+        self.environment = environment
+        self.options = options
         self.rng = rng
-        self.canvas = build_canvas(camera, params.distortion)
+        env, opt = environment, options
+        self.ambient_light = env.ambient_light
+        self.rain_drops_per_frame = env.rain_drops_per_frame if env.weather == "rain" else 0
+        self.canvas = build_canvas(camera, env.lens_distortion)
         self.lamp_positions_m = np.array(
             [[lamp.x_m, lamp.y_m, lamp.pole_height_m] for lamp in street.lamps], dtype=np.float64
         ).reshape(-1, 3)
-        shading = ShadingInputs(
-            params.ambient_light, params.ir_emitter_power, self.lamp_positions_m
-        )
-        self.scene = StaticScene(
-            self.canvas, street, shading, rng, params.branch_sway, params.wind_mps
-        )
+        shading = ShadingInputs(self.ambient_light, opt.ir_emitter_power, self.lamp_positions_m)
+        self.scene = StaticScene(self.canvas, street, shading, rng, opt.branch_sway, env.wind_mps)
         self._heads_in_view = self.canvas.spheres_in_view(
             self.lamp_positions_m, np.full(len(self.lamp_positions_m), 1.0)
         )
         prepare_models()
-        self.painter = AgentPainter(self.canvas, params.exposure_ms, params.motion_blur)
+        self.painter = AgentPainter(self.canvas, env.exposure_ms, opt.motion_blur)
         self.output = FrameOutput(self.canvas)
         self._shown_at = self.canvas.frame_to_canvas_index()
         no_uv = np.zeros((0, 0), np.float32)
         self._frame_uv = self.canvas.frame_uv or (no_uv, no_uv)
         self.noise = (
-            SensorNoise(rng, camera.height_px, camera.width_px, params.sensor_noise_std_dn)
-            if params.sensor_noise_std_dn > 0.0
+            SensorNoise(rng, camera.height_px, camera.width_px, env.sensor_noise_std_dn)
+            if env.sensor_noise_std_dn > 0.0
             else None
         )
-        self.insects = Insects(params.insects_per_min, int(rng.integers(2**63)))
+        self.insects = Insects(env.insects_per_min, int(rng.integers(2**63)))
         self._frame_seed = int(rng.integers(2**63))
         pole, heading = camera.position_m, camera.heading_unit
         self._forward_axis = (float(pole[0]), float(pole[1]), float(heading[0]), float(heading[1]))
@@ -177,7 +157,7 @@ class CameraRenderer:
             raise ValueError(
                 f"lamp_levels: need one level per street lamp ({len(self.street.lamps)}), got {len(levels)}"
             )
-        if not self.params.lamp_light:
+        if not self.options.lamp_light:
             return np.zeros_like(levels)
         levels = np.where(levels == levels, levels, 0.0)  # NaN: off
         return np.minimum(np.maximum(levels, 0.0), 1.0)
@@ -218,7 +198,7 @@ class CameraRenderer:
         renderer's seed instead, so a frame is the same whichever frames were
         rendered before it (cameras that skip idle frames stay comparable).
         """
-        p = self.params
+        ambient, emitter = self.ambient_light, self.options.ir_emitter_power
         if frame_index is not None and frame_index < 0:
             raise ValueError(f"frame_index: must be >= 0, got {frame_index}")
         levels = self._levels(lamp_levels)
@@ -231,24 +211,22 @@ class CameraRenderer:
         img = self.output.work
         boxes: list[tuple[int, int, int, int]] = []
 
-        spot_gain = 1.0 - p.ambient_light
+        spot_gain = 1.0 - ambient
         if spot_gain > 0.0 and lit:
             boxes += add_ground_spots(self.scene, img, lit, spot_gain)
 
         on = levels > 0.0
-        lighting = AgentLighting.of(
-            p.ir_emitter_power, p.ambient_light, self.lamp_positions_m[on], levels[on]
-        )
+        lighting = AgentLighting.of(emitter, ambient, self.lamp_positions_m[on], levels[on])
         labels = np.zeros(self.canvas.shape, np.uint8 if len(agents) < 255 else np.uint16)
         drawn, drawn_boxes = self.painter.paint(
             agents, lighting, img, depth, self.scene.nearest_occluder, labels
         )
         boxes += drawn_boxes
 
-        wet = p.rain_drops_per_frame > 0
-        pts, power, size = agent_glare_sources(self.canvas, agents, p.ambient_light)
+        wet = self.rain_drops_per_frame > 0
+        pts, power, size = agent_glare_sources(self.canvas, agents, ambient)
         boxes += glare(self.canvas, img, depth, pts, power, size, wet)
-        exposure_s = p.exposure_ms / 1000.0
+        exposure_s = self.environment.exposure_ms / 1000.0
         if wet:
             rng = (
                 self.rng
@@ -258,15 +236,15 @@ class CameraRenderer:
             draw_rain(
                 self.canvas,
                 img,
-                p.rain_drops_per_frame,
+                self.rain_drops_per_frame,
                 exposure_s,
-                p.ir_emitter_power,
-                p.ambient_light,
+                emitter,
+                ambient,
                 rng,
             )
             boxes.append((0, 0, self.canvas.width_px, self.canvas.height_px))
         boxes += self.insects.draw(
-            self.canvas, img, max(t_s, 0.0), exposure_s, p.ir_emitter_power, p.ambient_light
+            self.canvas, img, max(t_s, 0.0), exposure_s, emitter, ambient
         )
 
         frame = self.output.finish(boxes)
@@ -295,7 +273,7 @@ class CameraRenderer:
             self.lamp_positions_m[heads],
             LAMP_HEAD_GLARE * levels[heads],
             np.full(int(heads.sum()), LAMP_HEAD_SIZE_M),
-            self.params.rain_drops_per_frame > 0,
+            self.rain_drops_per_frame > 0,
         )
         self.output.set_background(
             key,

@@ -13,45 +13,39 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import simpy
 from tqdm import tqdm
 
 from citysim.config.scenario import Scenario
-from citysim.render.camera import CameraRenderer
-from citysim.sim.loop import RunError, render_params_of, seed_streams
-from citysim.world.street import build_street
 from citysim.report.topdown import plot_topdown
-from citysim.world.traffic import start_traffic
-from citysim.world.physics import World
+from citysim.sim.loop import RunError
+from citysim.sim.night import Night, build_night
 from detector.draw import draw_boxes, draw_detections
 from detector.outdir import staged_output
 
 TRUTH_CSV_HEADER = ["frame", "t_s", "object_id", "cls", "x", "y", "w", "h", "touches_border"]
 
 
-def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path, *, detect: bool = False,
-                lamps_full: bool = False, progress: bool = True) -> dict:
-    """Render lamp ``lamp``'s camera for ``duration_s`` simulated seconds into ``out_dir``."""
-    rngs = seed_streams(scenario.seed)
-    street = build_street(scenario)
-    if not 0 <= lamp < len(street.lamps):
-        raise RunError(f"--lamp: must be in 0..{len(street.lamps) - 1} for {scenario.name}, got {lamp}")
-    if not duration_s > 0:
-        raise RunError(f"--duration: must be > 0 s, got {duration_s}")
-    world = World(street, rngs["world"])
-    env = simpy.Environment()
-    start_traffic(env, world, scenario, rngs["traffic"])
-    camera = street.lamps[lamp].camera
-    renderer = CameraRenderer(camera, street, render_params_of(scenario), rngs["render"].spawn(len(street.lamps))[lamp])
+def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path, *, start_s: float = 0.0,
+                detect: bool = False, lamps_full: bool = False, progress: bool = True) -> dict:
+    """Render lamp ``lamp``'s camera from ``start_s`` for ``duration_s`` simulated seconds into ``out_dir``.
+
+    The traffic runs from the start of the night; frames are taken from ``start_s`` on. With
+    ``detect`` the video shows the truth (left) beside the detector's boxes (right), each half
+    captioned.
+    """
+    night = build_night(scenario)
+    check_clip(night, lamp, duration_s, start_s)
+    night.start_physics()
+    renderer = night.renderer(lamp)
+    camera = renderer.camera
     level = 1.0 if lamps_full else scenario.lamps.luminaire.dim_level
-    levels = np.full(len(street.lamps), level)
+    levels = np.full(night.n_lamps, level)
     detector = None
     if detect:
-        from detector.classifier import default_model
         from detector.detector import Detector
+        from detector.general_model import default_model
 
         detector = Detector(camera, model=default_model())
-    dt_s = 1.0 / scenario.physics_hz
     fps = camera.fps
     n_frames = int(duration_s * fps)
     tracks: dict[int, list[tuple[float, float]]] = {}
@@ -63,28 +57,50 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
             with open(stage / "truth.csv", "w", newline="") as fh:
                 rows = csv.writer(fh)
                 rows.writerow(TRUTH_CSV_HEADER)
-                t_phys = 0.0
                 for k in tqdm(range(n_frames), unit="frame", desc=f"render lamp {lamp}", disable=not progress):
-                    t = k / fps
-                    while t_phys + dt_s <= t + 1e-9:
-                        env.run(until=t_phys + dt_s)
-                        world.step(dt_s)
-                        t_phys += dt_s
-                    agents = world.states()
+                    t = start_s + k / fps
+                    night.run_until(t + 1e-6)  # the physics tick at t included
+                    agents = night.agents
                     for a in agents:
                         tracks.setdefault(a.object_id, []).append((a.x_m, a.y_m))
                     frame = renderer.render(t, agents, levels)
                     for obj in frame.truth:
                         rows.writerow([k, f"{t:.3f}", obj.object_id, obj.cls, obj.x, obj.y, obj.w, obj.h, int(obj.touches_border)])
                     stats["truth_rows"] += len(frame.truth)
-                    truth_img = cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
-                    draw_boxes(truth_img, [(o.x, o.y, o.w, o.h) for o in frame.truth], [f"{o.cls}#{o.object_id}" for o in frame.truth])
-                    if detector is not None:
-                        detections = detector.process(frame.image)
-                        stats["frames_with_target_detected"] += detector.is_target(detections)
-                        truth_img = np.hstack([truth_img, draw_detections(frame.image, detections)])
-                    writer.write(truth_img)
+                    writer.write(_clip_frame(frame, detector, stats))
         finally:
             writer.release()
-        plot_topdown(street, [s.camera for s in street.lamps], {i: np.array(p) for i, p in tracks.items()}, stage / "topdown.png")
+        plot_topdown(night.street, [s.camera for s in night.street.lamps], {i: np.array(p) for i, p in tracks.items()},
+                     stage / "topdown.png")
     return stats
+
+
+def check_clip(night: Night, lamp: int, duration_s: float, start_s: float) -> None:
+    """The clip's arguments against the scenario, before any frame is rendered."""
+    if not 0 <= lamp < night.n_lamps:
+        raise RunError(f"--lamp: must be in 0..{night.n_lamps - 1} for {night.scenario.name}, got {lamp}")
+    if not duration_s > 0:
+        raise RunError(f"--duration: must be > 0 s, got {duration_s}")
+    if not 0 <= start_s < night.scenario.duration_s:
+        raise RunError(f"--start: must be in 0..{night.scenario.duration_s:g} s (the scenario's night), got {start_s}")
+
+
+def _clip_frame(frame, detector, stats: dict) -> np.ndarray:
+    """The video frame: truth boxes, and with a detector its boxes beside them, each half captioned."""
+    truth_img = cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
+    draw_boxes(truth_img, [(o.x, o.y, o.w, o.h) for o in frame.truth], [f"{o.cls}#{o.object_id}" for o in frame.truth])
+    if detector is None:
+        return truth_img
+    detections = detector.process(frame.image)
+    stats["frames_with_target_detected"] += detector.is_target(detections)
+    detected_img = draw_detections(frame.image, detections)
+    _caption(truth_img, "truth")
+    _caption(detected_img, "detector")
+    return np.hstack([truth_img, detected_img])
+
+
+def _caption(img: np.ndarray, text: str) -> None:
+    """A caption in the bottom-left corner, dark-outlined so it reads on any background."""
+    org = (4, img.shape[0] - 6)
+    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
+    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)

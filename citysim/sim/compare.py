@@ -27,13 +27,9 @@ from tqdm import tqdm
 
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.controllers import CONTROLLERS
-from citysim.sim.loop import (
-    LAMPS_CSV_HEADER,
-    OBJECTS_CSV_HEADER,
-    check_controllers,
-    controller_spec,
-    run_to_files,
-)
+from citysim.metrics.crossings import OBJECTS_CSV_HEADER
+from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
+from citysim.sim.loop import check_controllers, controller_spec, run_controller
 from detector.outdir import staged_output
 
 
@@ -44,6 +40,16 @@ def resolve_controllers(scenario: Scenario, names: Sequence[str] | None) -> list
     if not any(s.name == "always_on" for s in specs):
         specs.insert(0, ControllerSpec(name="always_on"))  # savings are always against always-on, same run
     return specs
+
+
+def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None) -> dict:
+    """One controller's run writing its part of lamps.csv / objects.csv into ``part_dir``."""
+    part_dir.mkdir(parents=True, exist_ok=True)
+    label = spec.display_name
+    with open(part_dir / f"{label}.lamps.csv", "w", newline="") as lf, \
+            open(part_dir / f"{label}.objects.csv", "w", newline="") as of:  # fmt: skip
+        return run_controller(scenario, spec, lamps_writer=csv.writer(lf), objects_writer=csv.writer(of),
+                              on_progress=on_progress)
 
 
 def _worker(args):

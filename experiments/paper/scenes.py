@@ -29,15 +29,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import simpy
 
 from citysim.config.scenario import Scenario, load_scenario
 from citysim.metrics.confusion import greedy_match, iou_matrix
-from citysim.render.camera import CameraRenderer, TruthObject
-from citysim.sim.loop import render_params_of, seed_streams
-from citysim.world.street import build_street
-from citysim.world.traffic import start_traffic
-from citysim.world.physics import World
+from citysim.render.camera import TruthObject
+from citysim.sim.night import build_night
 from detector.classifier import CLASSES, default_model
 from detector.detector import Detection, Detector
 from detector.segment import Regions
@@ -262,37 +258,22 @@ def film_scene(
 ) -> SceneRecords:
     """Film and score ``scene`` (see the module docstring); ``on_frame`` is called per camera frame."""
     scenario = scene.load()
-    streams = seed_streams(scenario.seed)
-    street = build_street(scenario)
+    night = build_night(scenario)
     for lamp in scene.cameras:
-        if not 0 <= lamp < len(street.lamps):
+        if not 0 <= lamp < night.n_lamps:
             raise ValueError(
                 f"paper scene {scene.key}: camera lamp {lamp} not in {scene.scenario_file} "
-                f"(0..{len(street.lamps) - 1})"
+                f"(0..{night.n_lamps - 1})"
             )
-    world = World(street, streams["world"])
-    env = simpy.Environment()
-    start_traffic(env, world, scenario, streams["traffic"])
-    render_rngs = streams["render"].spawn(len(street.lamps))
-    params = render_params_of(scenario)
+    night.start_physics()
     model = default_model()
-    cams = [street.lamps[i].camera for i in scene.cameras]
-    renderers = [
-        CameraRenderer(c, street, params, render_rngs[i])
-        for c, i in zip(cams, scene.cameras, strict=True)
-    ]
+    renderers = night.renderers(scene.cameras)
+    cams = [r.camera for r in renderers]
     detectors = [Detector(c, model=model, max_distance_m=scene.range_m) for c in cams]
-    levels = np.full(len(street.lamps), scenario.lamps.luminaire.dim_level)
-
-    dt_s = 1.0 / scenario.physics_hz
-    t_phys = 0.0
+    levels = np.full(night.n_lamps, scenario.lamps.luminaire.dim_level)
 
     def advance(t_s: float) -> None:
-        nonlocal t_phys
-        while t_phys + dt_s <= t_s + 1e-9:
-            env.run(until=t_phys + dt_s)
-            world.step(dt_s)
-            t_phys += dt_s
+        night.run_until(t_s + 1e-6)  # the physics tick at t_s included
 
     fps = cams[0].fps
     n_frames = int(round(budget.filmed_s(scenario) * fps))
@@ -302,7 +283,7 @@ def film_scene(
     for k in range(n_frames):
         t_s = budget.preroll_s + k / fps
         advance(t_s)
-        agents = world.states()
+        agents = night.agents
         for j, (renderer, det) in enumerate(zip(renderers, detectors, strict=True)):
             frame = renderer.render(t_s, agents, levels, frame_index=k)
             cpu0, wall0 = time.process_time(), time.perf_counter()

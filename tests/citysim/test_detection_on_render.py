@@ -7,16 +7,11 @@ at least 90% of the fully visible pedestrians within 25 m of the camera.
 from pathlib import Path
 
 import numpy as np
-import simpy
 
 from citysim.config.scenario import load_scenario, override
 from citysim.metrics.confusion import iou_matrix
-from citysim.render.camera import CameraRenderer
-from citysim.sim.loop import render_params_of, seed_streams
-from citysim.world.street import build_street
-from citysim.world.traffic import start_traffic
-from citysim.world.physics import World
-from detector.classifier import default_model
+from citysim.sim.night import build_night
+from detector.general_model import default_model
 from detector.detector import Detector
 
 REPO = Path(__file__).resolve().parents[2]
@@ -35,24 +30,17 @@ def test_detector_finds_fully_visible_pedestrians_within_25_m():
                                  for k in range(2)],
         },
     )
-    rngs = seed_streams(scenario.seed)
-    street = build_street(scenario)
+    night = build_night(scenario)  # the same night a run builds: its camera streams, its traffic
     lamp = 0  # the first lamp's camera looks into the walkers coming from the far end and those leaving
-    camera = street.lamps[lamp].camera
-    world = World(street, rngs["world"])
-    env = simpy.Environment()
-    start_traffic(env, world, scenario, rngs["traffic"])
-    renderer = CameraRenderer(camera, street, render_params_of(scenario), rngs["render"])
+    night.start_physics()
+    renderer = night.renderer(lamp)
+    camera = renderer.camera
     detector = Detector(camera, model=default_model())
-    levels = np.full(len(street.lamps), scenario.lamps.luminaire.dim_level)
-    dt = 1.0 / scenario.physics_hz
-    steps_per_frame = round(scenario.physics_hz / camera.fps)
+    levels = np.full(night.n_lamps, scenario.lamps.luminaire.dim_level)
     seen = found = 0
     for k in range(int(scenario.duration_s * camera.fps)):
-        for _ in range(steps_per_frame):
-            env.run(until=env.now + dt)
-            world.step(dt)
-        frame = renderer.render(k / camera.fps, world.states(), levels, frame_index=k)
+        night.run_until(k / camera.fps + 1e-6)
+        frame = renderer.render(k / camera.fps, night.agents, levels, frame_index=k)
         detections = detector.process(frame.image)
         if k < camera.fps:  # the background model learns the street in the first second
             continue

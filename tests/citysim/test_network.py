@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 import simpy
 
-from citysim.control.network import LinkSpec, Message, Network
+from citysim.config.scenario import NetworkSpec
+from citysim.control.network import Message, Network
 
 
-def _run(spec: LinkSpec, seed: int, n_sends: int = 2000, n_lamps: int = 5):
+def _run(spec: NetworkSpec, seed: int, n_sends: int = 2000, n_lamps: int = 5):
     """Lamp 0 notifies lamps 1 and 2 every 0.1 s; returns (network, delivered messages)."""
     env = simpy.Environment()
     net = Network(env, n_lamps, spec, np.random.default_rng(seed))
@@ -34,7 +35,7 @@ def _run(spec: LinkSpec, seed: int, n_sends: int = 2000, n_lamps: int = 5):
 
 
 def test_loss_latency_and_jitter_statistics_over_many_messages():
-    spec = LinkSpec(latency_ms=20.0, jitter_ms=5.0, loss_probability=0.1)
+    spec = NetworkSpec(latency_ms=20.0, jitter_ms=5.0, loss_probability=0.1)
     net, received = _run(spec, seed=11)
     copies = 2 * 2000
     assert net.stats.sent == copies
@@ -56,7 +57,7 @@ def test_loss_latency_and_jitter_statistics_over_many_messages():
 
 
 def test_same_seed_same_deliveries_other_seed_other_deliveries():
-    spec = LinkSpec(loss_probability=0.2)
+    spec = NetworkSpec(loss_probability=0.2)
     _, a = _run(spec, seed=5, n_sends=200)
     _, b = _run(spec, seed=5, n_sends=200)
     _, c = _run(spec, seed=6, n_sends=200)
@@ -70,14 +71,14 @@ def test_same_seed_same_deliveries_other_seed_other_deliveries():
 
 def test_lossless_jitterless_link_delivers_everything_at_the_latency():
     net, received = _run(
-        LinkSpec(latency_ms=7.0, jitter_ms=0.0, loss_probability=0.0), seed=1, n_sends=50
+        NetworkSpec(latency_ms=7.0, jitter_ms=0.0, loss_probability=0.0), seed=1, n_sends=50
     )
     assert net.stats.lost == 0 and len(received) == 100
     assert all(m.t_delivered_s - m.t_sent_s == pytest.approx(0.007) for m in received)
 
 
 def test_a_dead_link_delivers_nothing():
-    net, received = _run(LinkSpec(loss_probability=1.0), seed=1, n_sends=50)
+    net, received = _run(NetworkSpec(loss_probability=1.0), seed=1, n_sends=50)
     assert received == [] and net.stats.lost == 100 and net.stats.in_flight == 0
 
 
@@ -90,13 +91,13 @@ def test_a_dead_link_delivers_nothing():
         ("repeat_s", -3.0),
     ],
 )
-def test_link_spec_errors_name_the_field(field, value):
-    with pytest.raises(ValueError, match=rf"LinkSpec\.{field}"):
-        LinkSpec(**{field: value})
+def test_network_spec_errors_name_the_field(field, value):
+    with pytest.raises(ValueError, match=rf"NetworkSpec[\s\S]*{field}"):
+        NetworkSpec(**{field: value})
 
 
 def test_send_errors_name_the_argument():
-    net = Network(simpy.Environment(), 3, LinkSpec(), np.random.default_rng(0))
+    net = Network(simpy.Environment(), 3, NetworkSpec(), np.random.default_rng(0))
     with pytest.raises(ValueError, match="sender"):
         net.send(3, [1], "x", {})
     with pytest.raises(ValueError, match="receivers"):
@@ -106,4 +107,4 @@ def test_send_errors_name_the_argument():
     with pytest.raises(ValueError, match="kind"):
         net.send(0, [1], "", {})
     with pytest.raises(ValueError, match="Network.n_lamps"):
-        Network(simpy.Environment(), 0, LinkSpec(), np.random.default_rng(0))
+        Network(simpy.Environment(), 0, NetworkSpec(), np.random.default_rng(0))

@@ -6,13 +6,11 @@ import math
 
 import numpy as np
 import pytest
-import simpy
 
 from citysim.config.scenario import ControllerSpec, scenario_from_mapping
-from citysim.sim.loop import run_controller, seed_streams
+from citysim.sim.loop import run_controller
+from citysim.sim.night import build_night
 from citysim.world.street import build_street
-from citysim.world.traffic import start_traffic
-from citysim.world.physics import World
 from tests.citysim.streets import two_way_street
 
 FPS = 15.0
@@ -52,16 +50,10 @@ def test_always_on_energy_is_lamps_times_rated_power_times_duration_exactly():
 
 def walker_track(scenario) -> list[tuple[float, float, float]]:
     """(t_s, x_m, y_m) of the scripted walker, from the same world the run builds (same seed)."""
-    rngs = seed_streams(scenario.seed)
-    world = World(build_street(scenario), rngs["world"])
-    env = simpy.Environment()
-    start_traffic(env, world, scenario, rngs["traffic"])
-    dt = 1.0 / scenario.physics_hz
-    track = []
-    for k in range(1, int(scenario.duration_s * scenario.physics_hz) + 1):
-        env.run(until=k * dt)
-        world.step(dt)
-        track += [(k * dt, a.x_m, a.y_m) for a in world.states()]
+    night = build_night(scenario)
+    track: list[tuple[float, float, float]] = []
+    night.start_physics(lambda t_s, agents: track.extend((t_s, a.x_m, a.y_m) for a in agents))
+    night.run_until(scenario.duration_s + 1e-6)
     return track
 
 

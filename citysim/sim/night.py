@@ -1,0 +1,114 @@
+"""The one place a night is built: seed streams -> street -> world -> clock -> traffic -> cameras.
+
+``build_night(scenario)`` gives a ``Night``: the scenario's street, the pymunk world, a simpy
+clock with the traffic arrivals started, and the random streams split off the seed. Every user
+of a night (``citysim run``'s loop, ``citysim render``, the paper reproduction, the tests)
+builds it here, so the same seed always means the same people, cars and sensor noise.
+
+``Night.start_physics(on_step)`` adds the process that steps the world at ``physics_hz`` and
+hands each step's agent snapshots to ``on_step``; ``Night.renderer(lamp)`` is that lamp
+camera's renderer, fed by its own child of the render stream (one per lamp, split once, in
+lamp order), so a camera's noise does not depend on which other cameras are rendered.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+import simpy
+
+from citysim.config.scenario import Scenario
+from citysim.world.agents import AgentState
+from citysim.world.physics import World
+from citysim.world.street import Street, build_street
+from citysim.world.traffic import start_traffic
+
+if TYPE_CHECKING:
+    from citysim.render.camera import CameraRenderer
+
+#: Streams split off the scenario seed, in this order; never reorder (results would change).
+STREAMS = ("traffic", "world", "render", "control", "network")
+
+StepHook = Callable[[float, list[AgentState]], None]
+
+
+def seed_streams(seed: int) -> dict[str, np.random.Generator]:
+    """One independent generator per stream name of ``STREAMS``, children of ``seed``."""
+    children = np.random.SeedSequence(seed).spawn(len(STREAMS))
+    return {name: np.random.default_rng(child) for name, child in zip(STREAMS, children, strict=True)}
+
+
+@dataclass
+class Night:
+    """A scenario's street, world, clock and random streams, with the traffic running."""
+
+    scenario: Scenario
+    streams: dict[str, np.random.Generator]
+    street: Street
+    world: World
+    env: simpy.Environment
+    #: the agents after the latest physics step (empty before the first)
+    agents: list[AgentState] = field(default_factory=list)
+    _camera_streams: list[np.random.Generator] | None = None
+
+    @property
+    def physics_dt_s(self) -> float:
+        return 1.0 / self.scenario.physics_hz
+
+    @property
+    def n_lamps(self) -> int:
+        return len(self.street.lamps)
+
+    def start_physics(self, on_step: StepHook | None = None) -> None:
+        """Step the world at ``physics_hz`` from t = 0; ``on_step(t_s, agents)`` after each step."""
+        self.env.process(self._physics(on_step))
+
+    def _physics(self, on_step: StepHook | None):
+        dt_s = self.physics_dt_s
+        k = 0
+        while True:
+            k += 1
+            # scheduled at k * dt from the start, so steps do not drift with float sums
+            yield self.env.timeout(max(0.0, k * dt_s - self.env.now))
+            self.world.step(dt_s)
+            self.agents = self.world.states()
+            if on_step is not None:
+                on_step(self.env.now, self.agents)
+
+    def run_until(self, t_s: float) -> None:
+        """Advance the clock to ``t_s`` (events at exactly ``t_s`` have not run yet)."""
+        if t_s > self.env.now:
+            self.env.run(until=t_s)
+
+    def camera_streams(self) -> list[np.random.Generator]:
+        """One render stream per lamp camera, split once off the render stream, in lamp order."""
+        if self._camera_streams is None:
+            self._camera_streams = self.streams["render"].spawn(self.n_lamps)
+        return self._camera_streams
+
+    def renderer(self, lamp_index: int) -> CameraRenderer:
+        """The renderer of one lamp's camera under the scenario's environment."""
+        # imported here: the renderer loads numba (~150 MB), which light controllers never need
+        from citysim.render.camera import CameraRenderer
+
+        if not 0 <= lamp_index < self.n_lamps:
+            raise IndexError(f"lamp: must be in 0..{self.n_lamps - 1}, got {lamp_index}")
+        site = self.street.lamps[lamp_index]
+        env = self.scenario.environment
+        return CameraRenderer(site.camera, self.street, env, self.camera_streams()[lamp_index])
+
+    def renderers(self, lamps: Sequence[int] | None = None) -> list[CameraRenderer]:
+        return [self.renderer(i) for i in (range(self.n_lamps) if lamps is None else lamps)]
+
+
+def build_night(scenario: Scenario) -> Night:
+    """The scenario's night at t = 0, traffic processes started, physics not yet."""
+    streams = seed_streams(scenario.seed)
+    street = build_street(scenario)
+    world = World(street, streams["world"])
+    env = simpy.Environment()
+    start_traffic(env, world, scenario, streams["traffic"])
+    return Night(scenario, streams, street, world, env)
