@@ -20,19 +20,24 @@ import cv2
 from tqdm import tqdm
 
 from detector.camera import CameraError, CameraModel
+from detector.classes import GENERAL_CAMERA_HEIGHT_M, GENERAL_MIN_VIEW_RANGE_M, GENERAL_TILT_DEG
 from detector.outdir import staged_output
 from detector.video import VideoError, camera_for_video, gray_frames, probe_video
 
 CSV_HEADER = ["frame", "x", "y", "w", "h", "cls", "p_target", "width_m", "height_m", "area_m2", "distance_m"]
 USER_ERRORS = (CameraError, VideoError, FileNotFoundError, ValueError)
+# the general model's cameras in words ("2-10 m high", "0-80 deg tilt")
+_GENERAL_HEIGHTS = "{:g}-{:g} m high".format(*GENERAL_CAMERA_HEIGHT_M)
+_GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
 
 
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
                  max_width_px: int = 424, max_distance_m: float = 25.0, progress: bool = True) -> dict:
     """Run the detector over a video; returns a small summary dict (also printed by the CLI)."""
-    from detector.classifier import DimensionalClassifier, default_model, train_camera_model
+    from detector.classifier import DimensionalClassifier
     from detector.detector import Detector
     from detector.draw import draw_detections
+    from detector.general_model import default_model
 
     camera = CameraModel.from_yaml(camera_file)
     info = probe_video(video)
@@ -45,8 +50,11 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
         # a steep or low camera that never sees 25 m ahead lies outside what the general model was
         # trained on; a model for this very camera is a few seconds away and clearly better there
         print(f"note: {camera_file} sees only {view_range_m(cam):.1f} m ahead, outside the general model's "
-              f"cameras (2-10 m high, seeing >= 25 m); training a model for this camera "
+              f"cameras ({_GENERAL_HEIGHTS}, seeing >= {GENERAL_MIN_VIEW_RANGE_M:g} m); training a model for this camera "
               f"(save one with 'python -m detector train' to skip this)", file=sys.stderr)
+        # the training code loads only here, for a camera the general model does not cover
+        from detector.train.fit import train_camera_model
+
         model = train_camera_model(cam)
     detector = Detector(cam, model=model, max_distance_m=max_distance_m)
     size = (cam.width_px, cam.height_px)
@@ -88,24 +96,23 @@ def view_range_m(camera: CameraModel) -> float:
 
 
 def general_model_covers(camera: CameraModel) -> bool:
-    """Is the camera like those the general model was trained on (see detector.training.TrainingConfig)?"""
-    from detector.training import TrainingConfig
-
-    config = TrainingConfig()
-    lo_h, hi_h = config.camera_height_m
-    lo_t, hi_t = config.tilt_deg
-    return lo_h <= camera.height_m <= hi_h and lo_t <= camera.tilt_deg <= hi_t and view_range_m(camera) >= config.min_view_range_m
+    """Is the camera like those the general model was trained on (``detector.classes``' ``GENERAL_*``
+    ranges, which the general model's TrainingConfig defaults to)?"""
+    lo_h, hi_h = GENERAL_CAMERA_HEIGHT_M
+    lo_t, hi_t = GENERAL_TILT_DEG
+    return (lo_h <= camera.height_m <= hi_h and lo_t <= camera.tilt_deg <= hi_t
+            and view_range_m(camera) >= GENERAL_MIN_VIEW_RANGE_M)
 
 
 def train_camera(camera_file: Path | None, out_path: Path, seed: int = 0) -> Path:
     """Train a model and write it atomically to out_path: specialised to one camera, or
     (camera_file None) the general model over the Table 2 range of cameras, as shipped."""
-    from detector.classifier import DEFAULT_N_PER_CLASS, train_camera_model, train_general_model
+    from detector.train.fit import DEFAULT_N_PER_CLASS, train_camera_model, train_general_model
 
     training = {"seed": seed, "n_per_class": DEFAULT_N_PER_CLASS}
     if camera_file is None:
         model = train_general_model(seed=seed)
-        training["cameras"] = "general (random cameras 2-10 m high, 0-80 deg tilt)"
+        training["cameras"] = f"general (random cameras {_GENERAL_HEIGHTS}, {_GENERAL_TILTS})"
     else:
         camera = CameraModel.from_yaml(camera_file)
         model = train_camera_model(camera, seed=seed)
@@ -145,7 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if argv and argv[0] == "train":
             args = _train_parser().parse_args(argv[1:])
-            from detector.training import UnseenKindError
+            from detector.train.sets import UnseenKindError
 
             try:
                 path = train_camera(args.camera, args.out, seed=args.seed)

@@ -93,9 +93,6 @@ class CameraModel(BaseModel):
         except ValidationError as exc:
             raise CameraError(f"{source}: {format_validation_error(exc)}") from None
 
-    def to_yaml_dict(self) -> dict:
-        return self.model_dump(exclude_defaults=False)
-
     def placed(self, **pose: float) -> CameraModel:
         """A copy at another pose (x_m, y_m, yaw_deg, height_m, tilt_deg ...)."""
         return self.model_validate({**self.model_dump(), **pose})

@@ -200,10 +200,6 @@ class Tracker:
     def is_confirmed(self, track_id: int) -> bool:
         return track_id in self.confirmed_ids()
 
-    def predicted_boxes_px(self) -> np.ndarray:
-        """(T, 4) where each track is expected in the next frame."""
-        return np.array(self._predicted(), np.float64).reshape(-1, 4)
-
     def _predicted(self) -> list[tuple[float, float, float, float]]:
         return [
             (x + vx * (m + 1), y + vy * (m + 1), w, h)

@@ -32,15 +32,12 @@ import numpy as np
 import sklearn
 
 from detector.camera import CameraModel
-from detector.classifier import (
-    DimensionalClassifier,
-    camera_rows_proba,
-    default_model,
-    numpy_predict_proba,
-)
+from detector.classifier import DimensionalClassifier
 from detector.confirm import Tracker
 from detector.divide import DivisionParams, divide_rows
+from detector.fast_proba import camera_rows_proba, numpy_predict_proba
 from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
+from detector.general_model import default_model
 from detector.segment import Regions, Segmenter, SegmenterParams
 
 __all__ = ["Detection", "Detector", "numpy_predict_proba"]
@@ -56,7 +53,7 @@ class Detection:
 
     ``features`` are ``detector.features.FEATURE_NAMES`` (width m, height m,
     area m^2, distance m, tilt deg, camera height m); ``probabilities`` follow
-    the model's ``classes_`` (``detector.classifier.CLASSES``); ``p_target`` is
+    the model's ``classes_`` (``detector.classes.CLASSES``); ``p_target`` is
     1 - P(noise).
     """
 

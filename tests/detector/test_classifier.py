@@ -10,16 +10,11 @@ import sklearn
 from sklearn.metrics import confusion_matrix
 from sklearn.utils.estimator_checks import estimator_checks_generator
 
-from detector.classifier import (
-    CLASSES,
-    GENERAL_MODEL_PATH,
-    TARGET_CLASSES,
-    DimensionalClassifier,
-    ModelFileError,
-    default_model,
-    train_general_model,
-)
-from detector.training import make_training_samples, make_training_set
+from detector.classes import CLASSES, TARGET_CLASSES
+from detector.classifier import DimensionalClassifier, ModelFileError
+from detector.general_model import GENERAL_MODEL_PATH, default_model
+from detector.train.fit import train_general_model
+from detector.train.sets import make_training_samples, make_training_set
 
 
 @pytest.fixture(scope="module")
@@ -170,7 +165,7 @@ def test_sklearn_estimator_checks(estimator, check) -> None:
 
 def test_camera_rows_proba_equals_predict_proba(small_model, held_out) -> None:
     from detector.camera import CameraModel
-    from detector.classifier import camera_rows_proba
+    from detector.fast_proba import camera_rows_proba
 
     cam = CameraModel(
         height_m=4.5,

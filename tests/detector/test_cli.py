@@ -13,7 +13,7 @@ import yaml
 
 from detector.__main__ import CSV_HEADER, main
 from detector.camera import CameraModel
-from detector.shapes import pedestrian_shape, silhouette_mask
+from detector.train.shapes import pedestrian_shape, silhouette_mask
 
 SCENE_B = dict(height_m=3.1, tilt_deg=22.0, focal_mm=0.73, sensor_w_mm=0.7, sensor_h_mm=0.52, width_px=320,
                height_px=240, fps=15.0)

@@ -9,13 +9,20 @@ import pytest
 from sklearn.linear_model import LogisticRegression
 
 from detector.camera import CameraModel
-from detector.classifier import CLASSES, default_model, numpy_predict_proba
+from detector.classes import CLASSES
 from detector.confirm import Tracker
 from detector.detector import Detection, Detector
 from detector.divide import divide_regions
+from detector.fast_proba import numpy_predict_proba
 from detector.features import SCALAR_MAX_REGIONS, region_features
+from detector.general_model import default_model
 from detector.segment import Segmenter
-from detector.shapes import cyclist_shape, ground_spot_shape, pedestrian_shape, silhouette_mask
+from detector.train.shapes import (
+    cyclist_shape,
+    ground_spot_shape,
+    pedestrian_shape,
+    silhouette_mask,
+)
 from tests.detector.cameras import scene_b
 
 H_PX, W_PX = 240, 320

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from detector.camera import CameraModel
-from detector.divide import DivisionParams, divide_regions, split_object_and_spot
+from detector.divide import DivisionParams, divide_regions
 from detector.features import region_features
 from detector.segment import Regions, Segmenter, SegmenterParams, contour_boxes_and_areas
-from detector.shapes import pedestrian_shape, silhouette_mask
+from detector.split import split_object_and_spot
+from detector.train.shapes import pedestrian_shape, silhouette_mask
 from tests.detector.cameras import scene_b
 
 H_PX, W_PX = 240, 320

@@ -9,7 +9,8 @@ import cv2
 import numpy as np
 import pytest
 
-from detector.shapes import (
+import detector.classes as classes
+from detector.train.shapes import (
     animal_shape,
     cyclist_shape,
     group_shape,
@@ -21,11 +22,11 @@ from tests.detector.cameras import scene_b
 
 SCENE_B = scene_b()
 
-# (width, height, length) corners of the Table 1 boxes
+# (width, height, length) corners of the Table 1 boxes of the classes built as one model
 TABLE1 = {
-    "pedestrian": ((0.3, 0.64), (1.15, 2.0), (0.3, 0.79)),
-    "cyclist": ((0.3, 0.64), (1.5, 1.9), (1.5, 1.7)),
-    "vehicle": ((1.4, 1.8), (1.4, 2.0), (3.7, 4.6)),
+    cls: (size.width_m, size.height_m, size.length_m)
+    for cls, size in classes.TABLE1.items()
+    if cls in ("pedestrian", "cyclist", "vehicle")
 }
 
 
@@ -127,9 +128,9 @@ def test_silhouette_lands_where_the_camera_projects_it() -> None:
 
 
 def test_parts_and_silhouettes_stay_importable_from_shapes() -> None:
-    import detector.shape_parts as shape_parts
-    import detector.shapes as shapes
-    import detector.silhouette as silhouette
+    import detector.train.shape_parts as shape_parts
+    import detector.train.shapes as shapes
+    import detector.train.silhouette as silhouette
 
     for name in ("Shape", "IR_REFLECTANCE", "VERTICES_PER_PART", "Parts"):
         assert getattr(shapes, name) is getattr(shape_parts, name)

@@ -10,17 +10,12 @@ import numpy as np
 import pytest
 
 from detector.camera import CameraModel
+from detector.classes import CLASSES
 from detector.features import FEATURE_NAMES
-from detector.shapes import pedestrian_shape
-from detector.training import (
-    CLASSES,
-    FEATURE_NOISE,
-    NOISE_SAMPLERS,
-    TrainingConfig,
-    make_training_samples,
-    make_training_set,
-    shape_region,
-)
+from detector.train.regions import shape_region
+from detector.train.samplers import FEATURE_NOISE, NOISE_SAMPLERS
+from detector.train.sets import TrainingConfig, make_training_samples, make_training_set
+from detector.train.shapes import pedestrian_shape
 from tests.detector.cameras import scene_b
 
 SCENE_B = scene_b()
@@ -133,17 +128,20 @@ def test_every_noise_kind_is_registered() -> None:
     assert not set(NOISE_SAMPLERS) & set(FEATURE_NOISE)
 
 
-def test_region_limits_are_the_segmenters_and_old_names_still_import() -> None:
-    import detector.training as training
-    import detector.training_samplers as samplers
+def test_region_limits_are_the_segmenters_and_cameras_the_general_models() -> None:
+    import detector.classes as classes
     from detector.segment import SegmenterParams
+    from detector.train.samplers import TARGET_SAMPLERS
 
     config, segmenter = TrainingConfig(), SegmenterParams()
     for name in ("open_kernel_px", "dilate_iterations", "min_area_fraction", "min_extent"):
         assert getattr(config, name) == getattr(segmenter, name), name
-    for name in ("TABLE1", "SizeRange", "TARGET_SAMPLERS", "NOISE_SAMPLERS", "FEATURE_NOISE"):
-        assert getattr(training, name) is getattr(samplers, name)
-    assert set(training.TARGET_SAMPLERS) == set(CLASSES[1:])
+    # the runtime tells whether a camera is like the general model's from the same constants
+    assert config.camera_height_m == classes.GENERAL_CAMERA_HEIGHT_M
+    assert config.tilt_deg == classes.GENERAL_TILT_DEG
+    assert config.min_view_range_m == classes.GENERAL_MIN_VIEW_RANGE_M
+    # targets in CLASSES order: make_training_set's rows follow it
+    assert tuple(TARGET_SAMPLERS) == classes.TARGET_CLASSES == tuple(classes.TABLE1)
 
 
 def test_cli_train_names_the_camera_file_that_never_sees_an_object_whole(tmp_path, capsys) -> None:

@@ -1,4 +1,4 @@
-"""The convex parts the 3D models of ``detector.shapes`` are built from, and the ``Shape`` they make.
+"""The convex parts the 3D models of ``detector.train.shapes`` are built from, and the ``Shape`` they make.
 
 Conventions: a part is a convex solid given by ``VERTICES_PER_PART`` (8)
 vertices; helpers build parts in a model's local frame (forward f along the
@@ -68,12 +68,6 @@ class Shape:
             float(np.ptp(f)),
             float(np.ptp(lat)),
             float(pts[:, 2].max() - min(0.0, pts[:, 2].min())),
-        )
-
-    def translated(self, dx_m: float, dy_m: float) -> Shape:
-        """The same model moved on the ground by (dx, dy), m."""
-        return Shape(
-            self.corners_m + np.array([dx_m, dy_m, 0.0]), self.ir_reflectance, self.part_kind
         )
 
 

@@ -1,29 +1,32 @@
 """Synthetic training features for the dimensional classifier (paper section 5.3).
 
 Each sample is one object seen by one random camera: the 3D model of
-``detector.shapes`` (sizes uniform in Table 1, any heading, any gait phase)
-stands at a random ground point in view, is projected with
+``detector.train.shapes`` (sizes uniform in Table 1, any heading, any gait
+phase) stands at a random ground point in view, is projected with
 ``CameraModel.project``, rasterised (union of its convex parts, swept over the
 exposure for motion blur), cleaned with the segmenter's morphology, and turned
-into a bounding box and a Green's-theorem contour area. The features come from
+into a bounding box and a Green's-theorem contour area
+(``detector.train.regions``). The features come from
 ``detector.features.region_features``: the very code the detector runs.
 
 What each kind of object is, and how it is drawn, lives in
-``detector.training_samplers``. Noise is of two sorts, mixed by
+``detector.train.samplers``. Noise is of two sorts, mixed by
 ``TrainingConfig.noise_weights``: the paper's feature vectors out of the
 Table 1 ranges (too small, too flat, too tall and thin, too large; drawn
 directly, as in the paper), and things a night camera really sees move,
 rendered through the same projection so their features are realistic
-(animals, light spots on the road, insects near the lens, foliage). There are ``noise_ratio`` (3) noise rows per target row: at
-night noise outnumbers targets (1.9-2.6 times in the paper's scenes A-C, Table
-2); 3 holds the false-positive rate under 5 % while misses stay near 1.5 %.
+(animals, light spots on the road, insects near the lens, foliage). There are
+``noise_ratio`` (3) noise rows per target row: at night noise outnumbers
+targets (1.9-2.6 times in the paper's scenes A-C, Table 2); 3 holds the
+false-positive rate under 5 % while misses stay near 1.5 %.
 
 Cameras: pole height 2-10 m, tilt 0-80 deg, intrinsics of the paper's three
 Table 2 cameras, keeping only those that see the ground at least
-``min_view_range_m`` (25 m, the paper's detection-range requirement) far; or
-a given list of cameras (a model specialised to one installation). The camera
-stands at the origin looking along +x, so the "forward distance" of the
-features is the world x of the ground point.
+``min_view_range_m`` (25 m, the paper's detection-range requirement) far
+(the ranges are ``detector.classes``' ``GENERAL_*``, which the runtime reads
+too); or a given list of cameras (a model specialised to one installation).
+The camera stands at the origin looking along +x, so the "forward distance"
+of the features is the world x of the ground point.
 
 Determinism: everything is drawn from the one ``numpy.random.Generator``
 passed in; the same seed gives the same arrays, bit for bit.
@@ -39,41 +42,11 @@ import cv2
 import numpy as np
 
 from detector.camera import CameraModel
+from detector.classes import GENERAL_CAMERA_HEIGHT_M, GENERAL_MIN_VIEW_RANGE_M, GENERAL_TILT_DEG
 from detector.features import N_FEATURES, region_features
 from detector.segment import SegmenterParams
-from detector.shapes import Shape, rasterise_parts
-
-# the samplers live in their own module; these names stay importable from here
-from detector.training_samplers import (
-    FEATURE_NOISE,
-    NOISE_SAMPLERS,
-    TABLE1,
-    TARGET_SAMPLERS,
-    Sampler,
-    SizeRange,
-    group_members,
-    uniform,
-)
-
-__all__ = [
-    "CLASSES",
-    "FEATURE_NOISE",
-    "NOISE_SAMPLERS",
-    "TABLE1",
-    "TABLE2_INTRINSICS",
-    "TARGET_SAMPLERS",
-    "Intrinsics",
-    "Sampler",
-    "SizeRange",
-    "TrainingConfig",
-    "TrainingSet",
-    "UnseenKindError",
-    "group_members",
-    "make_training_samples",
-    "make_training_set",
-    "random_camera",
-    "shape_region",
-]
+from detector.train.regions import ground_points, jitter, shape_region
+from detector.train.samplers import FEATURE_NOISE, NOISE_SAMPLERS, TARGET_SAMPLERS, uniform
 
 # the segmenter's own defaults, so training regions are cleaned and filtered like the detector's
 _SEGMENTER = SegmenterParams()
@@ -94,11 +67,10 @@ class UnseenKindError(RuntimeError):
         )
 
 
-CLASSES = ("noise", "pedestrian", "group", "cyclist", "vehicle")
-
-
 @dataclass(frozen=True)
 class Intrinsics:
+    """A camera's lens and sensor: focal length and sensor size, mm; image size, px."""
+
     focal_mm: float
     sensor_w_mm: float
     sensor_h_mm: float
@@ -120,10 +92,10 @@ class TrainingConfig:
     ``detector.segment.SegmenterParams``'s (imported, so they cannot drift) so
     training regions look like the regions the detector extracts."""
 
-    camera_height_m: tuple[float, float] = (2.0, 10.0)
-    tilt_deg: tuple[float, float] = (0.0, 80.0)
+    camera_height_m: tuple[float, float] = GENERAL_CAMERA_HEIGHT_M
+    tilt_deg: tuple[float, float] = GENERAL_TILT_DEG
     intrinsics: tuple[Intrinsics, ...] = TABLE2_INTRINSICS
-    min_view_range_m: float = 25.0
+    min_view_range_m: float = GENERAL_MIN_VIEW_RANGE_M
     min_distance_m: float = 1.0
     max_distance_m: float = 50.0
     exposure_ms: tuple[float, float] = (0.0, 40.0)
@@ -205,96 +177,6 @@ def random_camera(
     )
 
 
-def _forward_range_m(cam: CameraModel, config: TrainingConfig) -> tuple[float, float]:
-    """Forward distances (m) of ground points the camera sees, clipped to the config's range."""
-    half_fov = math.atan(cam.sensor_h_mm / (2 * cam.focal_mm))
-    tilt = math.radians(cam.tilt_deg)
-    near = cam.height_m / math.tan(tilt + half_fov) if tilt + half_fov < math.pi / 2 else 0.0
-    far = cam.height_m / math.tan(tilt - half_fov) if tilt - half_fov > 1e-6 else math.inf
-    return max(near, config.min_distance_m), min(far, config.max_distance_m)
-
-
-def _ground_points(
-    rng: np.random.Generator, cam: CameraModel, n: int, config: TrainingConfig
-) -> np.ndarray:
-    """n ground points (n, 2) in view: forward distance uniform, column uniform; NaN if none."""
-    near, far = _forward_range_m(cam, config)
-    if far <= near:
-        return np.full((n, 2), np.nan)
-    d = rng.uniform(near, far, size=n)
-    u = rng.uniform(0, cam.width_px, size=n)
-    v = cam.cy_px + cam.fy_px * np.tan(np.arctan(cam.height_m / d) - math.radians(cam.tilt_deg))
-    return cam.pixel_to_ground(np.column_stack([u, v]), undistorted=True)[:, :2]
-
-
-# ------------------------------------------------------------------- regions
-def shape_region(
-    cam: CameraModel,
-    shape: Shape,
-    velocity_mps: np.ndarray,
-    exposure_s: float,
-    config: TrainingConfig,
-    kernel: np.ndarray,
-) -> tuple[np.ndarray, float] | None:
-    """Box (x, y, w, h) px and contour area px of the model as the segmenter would see it.
-
-    The model is swept over the exposure (each part becomes the convex hull of
-    its start and end positions), opened and dilated like the segmenter's mask,
-    and its external contours are measured. None when the region is lost
-    (out of view, touching the border, too small or too sparse).
-    """
-    start = shape.corners_m
-    swept = np.concatenate([start, start + velocity_mps * exposure_s], axis=1)
-    p, k, _ = swept.shape
-    uv = cam.project(swept.reshape(-1, 3), distort=True).reshape(p, k, 2)
-    # cheap early exits before rasterising: a vertex behind the camera or beyond a
-    # border pixel centre means the region would be cut; a tiny box cannot hold
-    # the minimum area
-    lo, hi = uv.reshape(-1, 2).min(axis=0), uv.reshape(-1, 2).max(axis=0)
-    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-        return None
-    if lo[0] < 0 or lo[1] < 0 or hi[0] > cam.width_px - 1 or hi[1] > cam.height_px - 1:
-        return None
-    if (hi[0] - lo[0] + 3) * (
-        hi[1] - lo[1] + 3
-    ) < config.min_area_fraction * cam.width_px * cam.height_px:
-        return None
-    margin = config.open_kernel_px * (config.dilate_iterations + 1)
-    sil = rasterise_parts(uv, cam.width_px, cam.height_px, margin_px=margin)
-    if sil is None or sil.touches_border:
-        return None
-    mask = cv2.morphologyEx(sil.mask, cv2.MORPH_OPEN, kernel)
-    if config.dilate_iterations > 0:
-        mask = cv2.dilate(mask, kernel, iterations=config.dilate_iterations)
-    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    if not contours:
-        return None
-    # the whole model is one training region, even when the segmenter would split it
-    x, y, w, h = cv2.boundingRect(np.concatenate(contours))
-    area = float(sum(cv2.contourArea(c) for c in contours))
-    x, y = x + sil.offset_px[0], y + sil.offset_px[1]
-    if x <= 0 or y <= 0 or x + w >= cam.width_px or y + h >= cam.height_px:
-        return None
-    if (
-        area < config.min_area_fraction * cam.width_px * cam.height_px
-        or area < config.min_extent * w * h
-    ):
-        return None
-    return np.array([x, y, w, h], dtype=np.float64), area
-
-
-def _jitter(
-    rng: np.random.Generator, box: np.ndarray, area: float, jitter_px: int
-) -> tuple[np.ndarray, float]:
-    """Move each box edge by up to jitter_px; the contour area scales with the box."""
-    if jitter_px <= 0:
-        return box, area
-    dl, dt, dr, db = rng.integers(-jitter_px, jitter_px + 1, size=4)
-    x, y, w, h = box
-    nw, nh = max(w - dl + dr, 1.0), max(h - dt + db, 1.0)
-    return np.array([x + dl, y + dt, nw, nh]), area * (nw * nh) / (w * h)
-
-
 # ----------------------------------------------------------------- the set
 @dataclass(frozen=True)
 class TrainingSet:
@@ -344,13 +226,7 @@ def make_training_samples(
     kernel = cv2.getStructuringElement(
         cv2.MORPH_ELLIPSE, (config.open_kernel_px, config.open_kernel_px)
     )
-    # one quota per kind, so the noise mix is the configured one whatever each kind's loss rate
-    total_weight = sum(config.noise_weights.values())
-    n_noise = config.noise_ratio * n_per_class * len(TARGET_SAMPLERS)
-    wanted = {c: n_per_class for c in TARGET_SAMPLERS}
-    wanted.update(
-        {k: round(n_noise * w / total_weight) for k, w in config.noise_weights.items() if w > 0}
-    )
+    wanted = _quotas(n_per_class, config)
     rows: dict[str, list[np.ndarray]] = {k: [] for k in wanted}
 
     attempts = dict.fromkeys(wanted, 0)
@@ -369,48 +245,74 @@ def make_training_samples(
             if cameras is None
             else cameras[int(rng.integers(len(cameras)))]
         )
-        kinds = [k for k in todo for _ in range(config.attempts_per_camera)]
         for k in todo:
             attempts[k] += config.attempts_per_camera
-        ground = _ground_points(rng, cam, len(kinds), config)
-        boxes, areas, kept = [], [], []
-        for kind, (gx, gy) in zip(kinds, ground, strict=True):
-            if not np.isfinite(gx):
-                continue
-            if kind in FEATURE_NOISE:
-                width_m, height_m = FEATURE_NOISE[kind](rng)
-                area_m2 = rng.uniform(0.3, 0.95) * width_m * height_m
-                if len(rows[kind]) < wanted[kind]:
-                    rows[kind].append(
-                        np.array([width_m, height_m, area_m2, gx, cam.tilt_deg, cam.height_m])
-                    )
-                continue
-            sampler = NOISE_SAMPLERS.get(kind) or TARGET_SAMPLERS[kind]
-            shape, velocity = sampler(rng, cam, float(gx), float(gy), rng.uniform(0, 2 * math.pi))
-            region = shape_region(
-                cam, shape, velocity, uniform(rng, config.exposure_ms) / 1000.0, config, kernel
-            )
-            if region is None:
-                continue
-            box, area = _jitter(rng, *region, config.jitter_px)
-            boxes.append(box)
-            areas.append(area)
-            kept.append(kind)
-        if not kept:
-            continue
-        feats, valid = region_features(cam, np.array(boxes), np.array(areas))
-        ok = (
-            valid
-            & (feats[:, 3] > 0)
-            & (feats[:, 3] <= config.max_distance_m)
-            & np.all(np.isfinite(feats), axis=1)
-        )
-        for kind, row, good in zip(kept, feats, ok, strict=True):
-            if good and len(rows[kind]) < wanted[kind]:
-                rows[kind].append(row)
+        _sample_camera(rng, cam, todo, rows, wanted, config, kernel)
     noise_kinds = [k for k in wanted if k not in TARGET_SAMPLERS]
     order = [*noise_kinds, *TARGET_SAMPLERS]  # noise first, then targets in CLASSES order
     X = np.concatenate([np.array(rows[k]).reshape(-1, N_FEATURES) for k in order])
     kind = np.repeat(np.array(order), [wanted[k] for k in order])
     y = np.where(np.isin(kind, noise_kinds), "noise", kind)
     return TrainingSet(X, y, kind)
+
+
+def _quotas(n_per_class: int, config: TrainingConfig) -> dict[str, int]:
+    """Rows wanted per kind: ``n_per_class`` per target class, the noise split by weight."""
+    # one quota per kind, so the noise mix is the configured one whatever each kind's loss rate
+    total_weight = sum(config.noise_weights.values())
+    n_noise = config.noise_ratio * n_per_class * len(TARGET_SAMPLERS)
+    wanted = {c: n_per_class for c in TARGET_SAMPLERS}
+    wanted.update(
+        {k: round(n_noise * w / total_weight) for k, w in config.noise_weights.items() if w > 0}
+    )
+    return wanted
+
+
+def _sample_camera(
+    rng: np.random.Generator,
+    cam: CameraModel,
+    todo: list[str],
+    rows: dict[str, list[np.ndarray]],
+    wanted: dict[str, int],
+    config: TrainingConfig,
+    kernel: np.ndarray,
+) -> None:
+    """Draw ``config.attempts_per_camera`` samples of each kind in ``todo`` seen by ``cam``;
+    append the feature rows of those it sees whole to ``rows``, up to each kind's quota."""
+    kinds = [k for k in todo for _ in range(config.attempts_per_camera)]
+    ground = ground_points(rng, cam, len(kinds), config)
+    boxes, areas, kept = [], [], []
+    for kind, (gx, gy) in zip(kinds, ground, strict=True):
+        if not np.isfinite(gx):
+            continue
+        if kind in FEATURE_NOISE:
+            width_m, height_m = FEATURE_NOISE[kind](rng)
+            area_m2 = rng.uniform(0.3, 0.95) * width_m * height_m
+            if len(rows[kind]) < wanted[kind]:
+                rows[kind].append(
+                    np.array([width_m, height_m, area_m2, gx, cam.tilt_deg, cam.height_m])
+                )
+            continue
+        sampler = NOISE_SAMPLERS.get(kind) or TARGET_SAMPLERS[kind]
+        shape, velocity = sampler(rng, cam, float(gx), float(gy), rng.uniform(0, 2 * math.pi))
+        region = shape_region(
+            cam, shape, velocity, uniform(rng, config.exposure_ms) / 1000.0, config, kernel
+        )
+        if region is None:
+            continue
+        box, area = jitter(rng, *region, config.jitter_px)
+        boxes.append(box)
+        areas.append(area)
+        kept.append(kind)
+    if not kept:
+        return
+    feats, valid = region_features(cam, np.array(boxes), np.array(areas))
+    ok = (
+        valid
+        & (feats[:, 3] > 0)
+        & (feats[:, 3] <= config.max_distance_m)
+        & np.all(np.isfinite(feats), axis=1)
+    )
+    for kind, row, good in zip(kept, feats, ok, strict=True):
+        if good and len(rows[kind]) < wanted[kind]:
+            rows[kind].append(row)

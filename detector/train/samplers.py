@@ -1,10 +1,11 @@
 """What one training sample is: the objects the classifier's training set is drawn from.
 
-Targets are the paper's Table 1 classes, sizes uniform in its ranges, as the
-articulated models of ``detector.shapes``. Noise is of two sorts: things a
-night camera really sees move, drawn as models too so they are projected and
-measured like the targets (``NOISE_SAMPLERS``), and the paper's feature
-vectors out of the Table 1 ranges, drawn directly (``FEATURE_NOISE``).
+Targets are the paper's Table 1 classes, sizes uniform in its ranges
+(``detector.classes.TABLE1``), as the articulated models of
+``detector.train.shapes``. Noise is of two sorts: things a night camera really
+sees move, drawn as models too so they are projected and measured like the
+targets (``NOISE_SAMPLERS``), and the paper's feature vectors out of the
+Table 1 ranges, drawn directly (``FEATURE_NOISE``).
 
 Conventions: world frame x along the street, y across it, z up, metres; a
 sampler places its object's ground footprint centre at (x, y) with heading
@@ -16,12 +17,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from detector.camera import CameraModel
-from detector.shapes import (
+from detector.classes import TABLE1
+from detector.train.shapes import (
     Shape,
     animal_shape,
     blob_shape,
@@ -31,29 +32,6 @@ from detector.shapes import (
     pedestrian_shape,
     vehicle_shape,
 )
-
-
-@dataclass(frozen=True)
-class SizeRange:
-    """Table 1 row ranges, metres: (min, max) width across, height, length along the heading."""
-
-    width_m: tuple[float, float]
-    height_m: tuple[float, float]
-    length_m: tuple[float, float]
-
-    def draw(self, rng: np.random.Generator) -> tuple[float, float, float]:
-        """One (width, height, length), each uniform in its range, drawn in that order."""
-        return uniform(rng, self.width_m), uniform(rng, self.height_m), uniform(rng, self.length_m)
-
-
-#: Paper Table 1 (length = "depth": step length, bicycle length, car length).
-TABLE1 = {
-    "pedestrian": SizeRange((0.3, 0.64), (1.15, 2.0), (0.3, 0.79)),
-    "group": SizeRange((1.2, 3.0), (1.5, 2.0), (0.3, 0.79)),
-    "cyclist": SizeRange((0.3, 0.64), (1.5, 1.9), (1.5, 1.7)),
-    "vehicle": SizeRange((1.4, 1.8), (1.4, 2.0), (3.7, 4.6)),
-}
-
 
 # ------------------------------------------------------------------ samplers
 # A sampler draws one object of its kind at ground point (x, y) with the given

@@ -1,6 +1,6 @@
 """Articulated 3D models of the paper's object classes, built from convex parts.
 
-The classifier's synthetic training data (``detector.training``) and the
+The classifier's synthetic training data (``detector.train.sets``) and the
 simulator's renderer project the *same* models, so what the detector learns is
 what the simulated camera shows.
 
@@ -10,15 +10,16 @@ Conventions:
   the ground is z = 0 and every model stands on it.
 * ``x_m, y_m`` is the centre of the model's ground footprint; ``heading_rad``
   is its direction of motion, counter-clockwise from +x.
-* Sizes follow the paper's Table 1: ``width_m`` across the heading,
-  ``height_m`` up, ``length_m`` along the heading ("depth": step length for
-  walkers, bicycle length for cyclists, car length for vehicles). A built
+* Sizes follow the paper's Table 1 (``detector.classes.TABLE1``): ``width_m``
+  across the heading, ``height_m`` up, ``length_m`` along the heading ("depth":
+  step length for walkers, bicycle length for cyclists, car length for
+  vehicles). A built
   model's axis-aligned extents in its own frame equal these numbers (for a
   walker, the length is reached at full stride, ``gait_phase_rad = pi/2``).
 * Every part is a convex solid given by K = 8 vertices (a box, a sheared box
-  or a flat octagon for wheels; ``detector.shape_parts``); the silhouette of a
-  model is the union of the convex hulls of its projected parts
-  (``detector.silhouette``).
+  or a flat octagon for wheels; ``detector.train.shape_parts``); the
+  silhouette of a model is the union of the convex hulls of its projected
+  parts (``detector.train.silhouette``).
 
 Builders are pure functions: no randomness inside; callers draw the sizes.
 """
@@ -32,7 +33,7 @@ import numpy as np
 
 # the parts and the silhouettes of these models live in their own modules; every name
 # stays importable from here
-from detector.shape_parts import (
+from detector.train.shape_parts import (
     IR_REFLECTANCE,
     VERTICES_PER_PART,
     Parts,
@@ -42,7 +43,7 @@ from detector.shape_parts import (
     slab,
     trapezoid_prism,
 )
-from detector.silhouette import (
+from detector.train.silhouette import (
     SUBPIXEL_BITS,
     Silhouette,
     project_parts,

@@ -1,8 +1,8 @@
-"""Silhouettes of the ``detector.shapes`` models: projection and rasterisation.
+"""Silhouettes of the ``detector.train.shapes`` models: projection and rasterisation.
 
 A model's silhouette in a camera's frame is the union of the convex hulls of
 its projected parts (each part is a convex solid). The classifier's training
-regions (``detector.training``) and the detector's tests rasterise models
+regions (``detector.train.sets``) and the detector's tests rasterise models
 with these functions.
 
 Conventions: pixels are OpenCV's (u right, v down, pixel centres on
@@ -23,7 +23,7 @@ import numpy as np
 from detector.camera import CameraModel
 
 if TYPE_CHECKING:
-    from detector.shape_parts import Shape
+    from detector.train.shape_parts import Shape
 
 SUBPIXEL_BITS = 4
 
