@@ -45,6 +45,9 @@ def cmd_run(args) -> int:
     workers = args.workers or default_workers()
     summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=args.out, workers=workers,
                              scenario_file=str(args.scenario))
+    from citysim.report.run_plots import plot_run
+
+    plot_run(args.out)
     print(comparison_table(summary))
     print(f"\nresults written to {args.out}/: summary.json, objects.csv, lamps.csv, plots/")
     return 0

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from citysim.render.camera import TruthObject
-from detector.classifier import CLASSES
+from detector.classes import CLASSES
 from detector.detector import Detection
 from detector.segment import Regions
 from experiments.paper.metrics import (

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from citysim.config.scenario import load_scenario
-from citysim.control.controllers import CONTROLLERS
+from citysim.control.registry import CONTROLLERS
 from citysim.world.street import build_street
 from detector.camera import CameraModel
 

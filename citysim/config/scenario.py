@@ -130,7 +130,6 @@ class ControllerSpec(Spec):
     hold_s: float | None = Field(
         default=None, ge=0, le=3600, description="overrides lamps.luminaire.hold_s"
     )
-    use_neighbours: bool | None = None
     schedule: tuple[ScheduleStep, ...] = ()
 
     @model_validator(mode="before")

@@ -27,7 +27,6 @@ import numpy as np
 import simpy
 
 from citysim.config.scenario import NetworkSpec
-from citysim.control.lamps import check_number
 
 
 @dataclass(frozen=True)

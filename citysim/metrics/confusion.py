@@ -17,7 +17,7 @@ from citysim.world.agents import TARGET_CLASSES
 from citysim.control.lamps import check_number
 from citysim.metrics.collector import Collector
 
-#: Detector class order (detector.classifier.CLASSES): rows/columns of ``confusion_5``.
+#: Detector class order (detector.classes.CLASSES): rows/columns of ``confusion_5``.
 CONFUSION_CLASSES = ("noise", *TARGET_CLASSES)
 
 

@@ -43,7 +43,7 @@ from citysim.render.clusters import PaintFrame, clusters, composite
 from citysim.render.kernels import SUBPIXEL_BITS, agent_box, clear_boxes, fill_ranks, pose_parts
 from citysim.render.models import draw_models
 from citysim.render.outline import outline_tables
-from detector.shape_parts import VERTICES_PER_PART
+from detector.train.shape_parts import VERTICES_PER_PART
 
 #: Clothes, paint and fur face the camera at varied angles; one mean incidence cosine.
 MEAN_INCIDENCE_COS = 0.8

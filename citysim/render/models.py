@@ -1,4 +1,4 @@
-"""Agent states -> the detector's 3D models (``detector.shapes``), posed for drawing.
+"""Agent states -> the detector's 3D models (``detector.train.shapes``), posed for drawing.
 
 A registry maps ``AgentState.cls`` to how its model is keyed (everything but
 the pose) and built at the origin. The renderer caches models by key, with
@@ -8,7 +8,7 @@ vectorised rotation + translation (``draw_models``); ``agent_shape`` gives one
 agent's exact model at its pose (for tests and tools).
 
 Conventions: world frame of DESIGN.md (x, y ground, z up, m); ``heading_rad``
-counter-clockwise from +x; model dimensions as in ``detector.shapes``.
+counter-clockwise from +x; model dimensions as in ``detector.train.shapes``.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 
 from citysim.world.agents import AgentState
 from citysim.render.outline import KnownTopology, model_topology
-from detector.shapes import (
+from detector.train.shapes import (
     Shape,
     animal_shape,
     cyclist_shape,
@@ -51,7 +51,7 @@ PhaseMap = Callable[[float], float]
 
 @dataclass(frozen=True)
 class AgentModel:
-    """How one class becomes a ``detector.shapes`` model: ``key`` names the model of an agent
+    """How one class becomes a ``detector.train.shapes`` model: ``key`` names the model of an agent
     (everything but its pose; phases through the given map) and ``build`` makes it at the
     origin, heading +x."""
 

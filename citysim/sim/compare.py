@@ -8,7 +8,6 @@ is staged and moved into place only when every controller finished:
     DIR/summary.json   figures per controller (see README)
     DIR/objects.csv    one row per object and lamp zone it crossed
     DIR/lamps.csv      level and power of every lamp, every simulated second
-    DIR/plots/*.png    energy, lamp levels with passages, lag CDF per class
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from citysim.config.scenario import ControllerSpec, Scenario
-from citysim.control.controllers import CONTROLLERS
+from citysim.control.registry import CONTROLLERS
 from citysim.metrics.crossings import OBJECTS_CSV_HEADER
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.loop import check_controllers, controller_spec, run_controller
@@ -76,12 +75,9 @@ def run_comparison(
     out_dir: Path | None = None,
     workers: int = 1,
     scenario_file: str | None = None,
-    plots: bool = True,
 ) -> dict:
-    """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder.
-
-    ``plots=False`` skips the PNGs (a sweep point keeps only its figures and objects.csv).
-    """
+    """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
+    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these)."""
     specs = resolve_controllers(scenario, controllers)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
@@ -122,10 +118,6 @@ def run_comparison(
         _merge_parts(parts, [s.display_name for s in specs], stage)
         shutil.rmtree(parts, ignore_errors=True)
         (stage / "summary.json").write_text(json.dumps(summary, indent=2))
-        if out_dir is not None and plots:
-            from citysim.report.run_plots import plot_run
-
-            plot_run(stage)
     return summary
 
 

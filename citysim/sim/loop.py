@@ -24,7 +24,8 @@ from typing import Any
 import numpy as np
 
 from citysim.config.scenario import ControllerSpec, Scenario
-from citysim.control.controllers import CONTROLLERS, ControlContext, Controller
+from citysim.control.base import ControlContext, Controller
+from citysim.control.registry import CONTROLLERS
 from citysim.control.lamps import Lamp
 from citysim.control.network import Network
 from citysim.metrics.collector import Collector

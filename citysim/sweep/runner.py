@@ -79,7 +79,7 @@ def run_point(
     try:
         with tempfile.TemporaryDirectory(prefix="citysim-point-") as tmp:
             out_dir = Path(tmp) / "run" if save_objects else None
-            summary = run_comparison(scenario, progress=False, out_dir=out_dir, workers=1, plots=False)
+            summary = run_comparison(scenario, progress=False, out_dir=out_dir, workers=1)
             if out_dir is not None and (out_dir / "objects.csv").exists():
                 files["objects.csv"] = (out_dir / "objects.csv").read_text()
     except Exception as exc:  # a run that raises is a failed point, not a failed sweep

@@ -255,7 +255,7 @@ def load_sweep(path: str | Path) -> ResolvedSweep:
 
 def resolve(spec: SweepSpec, sweep_file: Path) -> ResolvedSweep:
     """Check the paths and controllers of ``spec`` and build the base scenario."""
-    from citysim.control.controllers import CONTROLLERS
+    from citysim.control.registry import CONTROLLERS
 
     src = str(sweep_file)
     own_keys = {"seed": "seeds", "duration_s": "duration_s", "controllers": "controllers"}

@@ -11,17 +11,14 @@ along +x, so a ground point's forward distance is its world x, metres.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from detector.camera import CameraModel
+from detector.train.config import TrainingConfig
 from detector.train.shape_parts import Shape
 from detector.train.silhouette import rasterise_parts
-
-if TYPE_CHECKING:
-    from detector.train.sets import TrainingConfig
 
 
 def _forward_range_m(cam: CameraModel, config: TrainingConfig) -> tuple[float, float]:

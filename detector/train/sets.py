@@ -36,20 +36,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from detector.camera import CameraModel
-from detector.classes import GENERAL_CAMERA_HEIGHT_M, GENERAL_MIN_VIEW_RANGE_M, GENERAL_TILT_DEG
 from detector.features import N_FEATURES, region_features
-from detector.segment import SegmenterParams
+from detector.train.config import DEFAULT_CONFIG, TrainingConfig
 from detector.train.regions import ground_points, jitter, shape_region
 from detector.train.samplers import FEATURE_NOISE, NOISE_SAMPLERS, TARGET_SAMPLERS, uniform
 
-# the segmenter's own defaults, so training regions are cleaned and filtered like the detector's
-_SEGMENTER = SegmenterParams()
 #: A kind seen whole in fewer than 1 of HOPELESS_ODDS tries, after MIN_ATTEMPTS, fails training
 #: (the general set sees every kind in more than 1 of 8).
 HOPELESS_ODDS = 200
@@ -67,88 +64,9 @@ class UnseenKindError(RuntimeError):
         )
 
 
-@dataclass(frozen=True)
-class Intrinsics:
-    """A camera's lens and sensor: focal length and sensor size, mm; image size, px."""
-
-    focal_mm: float
-    sensor_w_mm: float
-    sensor_h_mm: float
-    width_px: int
-    height_px: int
-
-
-#: The paper's Table 2 cameras (Logitech C920, Microsoft HD-3000, Gadinan IP cam).
-TABLE2_INTRINSICS = (
-    Intrinsics(3.67, 4.8, 3.6, 424, 240),
-    Intrinsics(0.73, 0.7, 0.52, 320, 240),
-    Intrinsics(3.6, 3.45, 1.94, 424, 240),
-)
-
-
-@dataclass(frozen=True)
-class TrainingConfig:
-    """How samples are drawn. The morphology and region limits default to
-    ``detector.segment.SegmenterParams``'s (imported, so they cannot drift) so
-    training regions look like the regions the detector extracts."""
-
-    camera_height_m: tuple[float, float] = GENERAL_CAMERA_HEIGHT_M
-    tilt_deg: tuple[float, float] = GENERAL_TILT_DEG
-    intrinsics: tuple[Intrinsics, ...] = TABLE2_INTRINSICS
-    min_view_range_m: float = GENERAL_MIN_VIEW_RANGE_M
-    min_distance_m: float = 1.0
-    max_distance_m: float = 50.0
-    exposure_ms: tuple[float, float] = (0.0, 40.0)
-    jitter_px: int = 1
-    open_kernel_px: int = _SEGMENTER.open_kernel_px
-    dilate_iterations: int = _SEGMENTER.dilate_iterations
-    min_area_fraction: float = _SEGMENTER.min_area_fraction
-    min_extent: float = _SEGMENTER.min_extent
-    attempts_per_camera: int = 4
-    noise_ratio: float = 3.0
-    noise_weights: dict[str, float] = field(
-        default_factory=lambda: {
-            "too_small": 0.2,
-            "too_flat": 0.1,
-            "too_tall_thin": 0.1,
-            "too_large": 0.1,
-            "animal": 0.15,
-            "ground_spot": 0.15,
-            "insect": 0.1,
-            "foliage": 0.05,
-        }
-    )
-
-    def __post_init__(self) -> None:
-        for name in ("camera_height_m", "tilt_deg", "exposure_ms"):
-            lo, hi = getattr(self, name)
-            if not lo <= hi:
-                raise ValueError(
-                    f"TrainingConfig.{name} must be (min, max) with min <= max, got {(lo, hi)}"
-                )
-        if not 0 < self.min_distance_m < self.max_distance_m:
-            raise ValueError(
-                "TrainingConfig.min_distance_m / max_distance_m must satisfy 0 < min < max, "
-                f"got {self.min_distance_m}, {self.max_distance_m}"
-            )
-        valid_kinds = set(NOISE_SAMPLERS) | set(FEATURE_NOISE)
-        unknown = set(self.noise_weights) - valid_kinds
-        if (
-            unknown
-            or any(w < 0 for w in self.noise_weights.values())
-            or sum(self.noise_weights.values()) <= 0
-        ):
-            raise ValueError(
-                f"TrainingConfig.noise_weights must map kinds in {sorted(valid_kinds)} to weights >= 0 "
-                f"(not all 0), got {self.noise_weights}"
-            )
-        if not self.noise_ratio > 0:
-            raise ValueError(f"TrainingConfig.noise_ratio must be > 0, got {self.noise_ratio}")
-
-
 # -------------------------------------------------------------------- cameras
 def random_camera(
-    rng: np.random.Generator, config: TrainingConfig = TrainingConfig()
+    rng: np.random.Generator, config: TrainingConfig = DEFAULT_CONFIG
 ) -> CameraModel:
     """A camera at the origin looking along +x with random height, tilt and Table 2 intrinsics.
 
@@ -192,7 +110,7 @@ def make_training_set(
     n_per_class: int,
     rng: np.random.Generator,
     cameras: Sequence[CameraModel] | None = None,
-    config: TrainingConfig = TrainingConfig(),
+    config: TrainingConfig = DEFAULT_CONFIG,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Synthetic features ``(X (N, 6) float, y (N,) str class names)``.
 
@@ -210,7 +128,7 @@ def make_training_samples(
     n_per_class: int,
     rng: np.random.Generator,
     cameras: Sequence[CameraModel] | None = None,
-    config: TrainingConfig = TrainingConfig(),
+    config: TrainingConfig = DEFAULT_CONFIG,
 ) -> TrainingSet:
     """``make_training_set`` that also says which sampler made each row."""
     if not isinstance(n_per_class, int | np.integer) or n_per_class < 1:

@@ -113,7 +113,7 @@ def peak_memory_mb(fn, frames) -> float:
 
 
 def bench_detector() -> dict:
-    from detector.classifier import default_model
+    from detector.general_model import default_model
     from detector.detector import Detector
 
     print("== detector vs OpenCV floor (single thread, CPU time, interleaved frame by frame) ==")
@@ -138,9 +138,9 @@ def bench_detector() -> dict:
 
 def bench_render() -> dict:
     """Render ms per 320x240 frame with 0, 5 and 20 agents in view, beside the detector's ms on those frames."""
-    from citysim.render.camera import CameraRenderer, RenderParams
-    from experiments.bench.scene import bench_agents, bench_street
-    from detector.classifier import default_model
+    from citysim.render.camera import CameraRenderer
+    from experiments.bench.scene import BENCH_NIGHT, bench_agents, bench_street
+    from detector.general_model import default_model
     from detector.detector import Detector
 
     print("== renderer vs detector (320x240, CPU ms per frame, interleaved) ==")
@@ -151,11 +151,11 @@ def bench_render() -> dict:
     for n in (0, 5, 20):
         # an untimed pass first: numba compiles a kernel the first time a path needs it
         # (e.g. an agent behind a tree), which must not land inside the timed frames
-        warm = CameraRenderer(camera, street, RenderParams(), np.random.default_rng(1))
+        warm = CameraRenderer(camera, street, BENCH_NIGHT, np.random.default_rng(1))
         for k in range(160):
             warm.render(k / camera.fps, bench_agents(n, k / camera.fps), levels)
         del warm
-        renderer = CameraRenderer(camera, street, RenderParams(), np.random.default_rng(0))
+        renderer = CameraRenderer(camera, street, BENCH_NIGHT, np.random.default_rng(0))
         detector = Detector(camera, model=default_model())
         render_s = detect_s = 0.0
         frames = 150
@@ -202,7 +202,7 @@ def bench_sim(
     import json
     import subprocess
 
-    from citysim.control.controllers import CONTROLLERS
+    from citysim.control.registry import CONTROLLERS
 
     print(f"== simulation: {scenario_path}, per controller (each in a fresh process) ==")
     out = {}

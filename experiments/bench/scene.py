@@ -7,7 +7,7 @@ check while working on it). The scene is built here by
 hand (two lanes, two sidewalks, a lamp chain, walls, trees, a parked car) so
 the figure does not depend on any scenario file. Every frame has noise,
 motion blur, lens distortion, lamp light and swaying crowns on - the default
-``RenderParams`` - and agents of every class moving through the view, some
+the default ``EnvironmentSpec`` - and agents of every class moving through the view, some
 with their lights on.
 """
 
@@ -20,7 +20,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from citysim.world.agents import AgentState, MemberState
-from citysim.render.camera import CameraRenderer, RenderParams
+from citysim.config.scenario import EnvironmentSpec
+from citysim.render.camera import CameraRenderer
 from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from detector.camera import CameraModel
 
@@ -109,10 +110,14 @@ def bench_agents(n: int, t_s: float, rng_seed: int = 7) -> list[AgentState]:
     return out
 
 
+#: The bench's night: clear, a light wind swaying the crowns, the default sensor.
+BENCH_NIGHT = EnvironmentSpec(wind_mps=3.0)
+
+
 def bench_render(
     n_objects_list: Sequence[int] = (0, 5, 20),
     frames: int = 150,
-    params: RenderParams | None = None,
+    environment: EnvironmentSpec | None = None,
 ) -> dict[int, float]:
     """Median wall time per rendered frame, ms, for each number of agents in view."""
     street = bench_street()
@@ -121,7 +126,7 @@ def bench_render(
     out: dict[int, float] = {}
     for n in n_objects_list:
         renderer = CameraRenderer(
-            camera, street, params or RenderParams(), np.random.default_rng(0)
+            camera, street, environment or BENCH_NIGHT, np.random.default_rng(0)
         )
         states = [bench_agents(n, k / camera.fps) for k in range(frames)]
         for k in range(min(10, frames)):  # warm caches (kernels, spot textures)

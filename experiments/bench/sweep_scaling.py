@@ -20,7 +20,7 @@ from citysim.sweep.runner import run_sweep
 
 __all__ = ["bench_sweep_scaling", "main"]
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 BENCH_SCENARIO = {
     "name": "bench_tiny",

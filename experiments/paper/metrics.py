@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.metrics import average_precision_score, confusion_matrix, precision_recall_curve
 
-from detector.classifier import CLASSES
+from detector.classes import CLASSES
 from detector.confirm import p_detect_within
 from experiments.paper.scenes import TARGET_THRESHOLD, SceneRecords
 

@@ -13,7 +13,7 @@ import numpy as np
 from experiments.paper.scenes import PAPER_SCENES
 
 if TYPE_CHECKING:
-    from experiments.paper.reproduce import ConditionResult
+    from experiments.paper.results import ConditionResult
 
 
 def fmt(value: float | None, digits: int = 2) -> str:
@@ -155,7 +155,7 @@ def what_differs(night: ConditionResult, day: ConditionResult) -> str:
   cameras' height, angle and intrinsics but not where they stood or which way
   they looked; parking areas are expressed as short two-lane streets with wide
   walkways and rows of parked cars (see the scenario files' comments).
-- **The classifier is trained on synthetic features only** (`detector.training`,
+- **The classifier is trained on synthetic features only** (`detector.train.sets`,
   Table 1 sizes, cameras 2-10 m / 0-80 deg); the paper's was trained on
   synthetic and real data. Our rendered walkers keep Table 1's pedestrian width,
   which may be why a walker is rarely taken for a group here (paper: 0.32).

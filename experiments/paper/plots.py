@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from detector.classifier import CLASSES
+from detector.classes import CLASSES
 from experiments.paper.metrics import BINARY_CLASSES, Confusions, PrecisionRecall
 
 #: The paper's axis letters (Fig. 9): N noise, P pedestrian, G group, C cyclist, V vehicle, T target.

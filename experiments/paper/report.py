@@ -12,7 +12,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from detector.classifier import CLASSES
+from detector.classes import CLASSES
 from experiments.paper.metrics import Confusions
 from experiments.paper.notes import (
     BASELINE_NOTES,
@@ -26,7 +26,7 @@ from experiments.paper.notes import (
 from experiments.paper.scenes import PAPER_SCENES
 
 if TYPE_CHECKING:
-    from experiments.paper.reproduce import ConditionResult, Reproduction
+    from experiments.paper.results import ConditionResult, Reproduction
 
 #: Figures stated in the paper's text (Figs. 9-10 are only described through these).
 PAPER = {

@@ -22,7 +22,6 @@ import argparse
 import platform
 import subprocess
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -30,12 +29,7 @@ from tqdm import tqdm
 
 from experiments.paper.metrics import (
     VARIANTS,
-    BandRate,
-    BaselineRates,
-    Confusions,
-    PrecisionRecall,
     Rows,
-    WindowCheck,
     confusions,
     precision_recall,
     threshold_baseline,
@@ -44,9 +38,10 @@ from experiments.paper.metrics import (
 )
 from experiments.paper.plots import plot_confusions, plot_precision_recall
 from experiments.paper.report import write_markdown
+from experiments.paper.results import ConditionResult, Reproduction, SceneResult
 from experiments.paper.scenes import PAPER_SCENES, Budget, SceneRecords, film_scene, frames_to_film
 
-RESULTS_DIR = Path(__file__).resolve().parent / "results"
+RESULTS_DIR = Path(__file__).resolve().parents[1] / "results"
 FULL_BUDGET = Budget()
 #: A few seconds of film per scene: enough for every output to exist, not for the numbers.
 QUICK_BUDGET = Budget(preroll_s=45.0, warmup_s=1.0, scored_s=3.0)
@@ -56,52 +51,6 @@ CONDITIONS = ("night", "day")
 REPORT_NAME = "paper_comparison.md"
 CONFUSION_PNG = "paper_confusion.png"
 PR_PNG = "paper_precision_recall.png"
-
-
-@dataclass(frozen=True)
-class ConditionResult:
-    """Night (scenes A-C) or day (scene D) pooled, as in the paper's Figs. 9-10."""
-
-    name: str
-    scenes: tuple[str, ...]
-    records: SceneRecords
-    confusions: dict[str, Confusions]  # by variant (paper_metrics.VARIANTS)
-    precision_recall: dict[str, PrecisionRecall]
-    baseline: dict[float, BaselineRates]
-    window: WindowCheck
-    by_distance: list[BandRate]
-
-
-@dataclass(frozen=True)
-class SceneResult:
-    key: str
-    title: str
-    time_of_day: str
-    resolution: str
-    range_m: float
-    records: SceneRecords
-    confusions: Confusions  # 'objects' variant
-
-    @property
-    def detector_fps_cpu(self) -> float | None:
-        r = self.records
-        return r.detector_frames / r.detector_cpu_s if r.detector_cpu_s > 0 else None
-
-    @property
-    def detector_fps_wall(self) -> float | None:
-        r = self.records
-        return r.detector_frames / r.detector_wall_s if r.detector_wall_s > 0 else None
-
-
-@dataclass(frozen=True)
-class Reproduction:
-    scenes: dict[str, SceneResult]
-    conditions: dict[str, ConditionResult]
-    budget: Budget
-    quick: bool
-    cpu: str
-    files: dict[str, Path]
-    source: str  # the code's git commit (the numbers belong to it)
 
 
 def cpu_name() -> str:
@@ -117,7 +66,7 @@ def cpu_name() -> str:
 
 def source_commit() -> str:
     """The checkout's short commit, flagged if detector/ or citysim/ differ from it."""
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
 
     def git(*args: str) -> str:
         done = subprocess.run(

@@ -34,11 +34,12 @@ from citysim.config.scenario import Scenario, load_scenario
 from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.render.camera import TruthObject
 from citysim.sim.night import build_night
-from detector.classifier import CLASSES, default_model
+from detector.classes import CLASSES
+from detector.general_model import default_model
 from detector.detector import Detection, Detector
 from detector.segment import Regions
 
-SCENARIO_DIR = Path(__file__).resolve().parents[1] / "scenarios"
+SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
 #: IoU a detection needs with a truth box to be that object (as ``DetectionConfusion``).
 IOU_MATCH = 0.3
 #: A noise detection lying this much (share of its own box) on a target's box is a *fragment*:

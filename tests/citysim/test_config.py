@@ -143,6 +143,8 @@ BAD_FIELDS = [
     ("lamps.camera.focal", 3.0, "lamps.camera.focal", "unknown field"),
     ("street.lanes.0.width", 3.0, "street.lanes.0.width", "unknown field"),
     ("traffic.classes.truck", {"rate_per_hour": 3}, "traffic.classes.truck", "unknown field"),
+    # a field that nothing would read is refused, not silently ignored
+    ("controllers.0", {"name": "detector", "use_neighbours": True}, "controllers.0.use_neighbours", "unknown field"),
     ("lamps.camera.tilt_deg", "steep", "lamps.camera.tilt_deg", "valid number"),
     ("duration_s", -5, "duration_s", "greater than 0"),
     (

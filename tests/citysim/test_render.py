@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from citysim.world.agents import AgentState, MemberState
-from citysim.render.camera import CameraRenderer, RenderParams
+from citysim.config.scenario import EnvironmentSpec
+from citysim.render.camera import CameraRenderer, RenderOptions
 from experiments.bench.scene import bench_render
 from citysim.render.blur import _smear
 from citysim.render.models import agent_shape
@@ -27,10 +28,28 @@ PINHOLE = CameraModel(
 )
 BARREL = PINHOLE.placed(k1=-0.25, k2=0.06, p1=0.002)
 CAM_X, CAM_Y = 0.0, 6.0
+_OPTION_FIELDS = ("ir_emitter_power", "motion_blur", "lamp_light", "branch_sway")
+
+
+def settings(**kw) -> tuple[EnvironmentSpec, RenderOptions]:
+    """A night (EnvironmentSpec) and the renderer's own switches (RenderOptions) from one set of
+    keywords: ``ambient_light`` 1 is a day, ``distortion`` the lens, ``rain_drops_per_frame`` > 0
+    a rainy night; the wind blows 3 m/s unless given."""
+    kw = dict(kw)
+    options = RenderOptions(**{k: kw.pop(k) for k in _OPTION_FIELDS if k in kw})
+    if kw.pop("ambient_light", 0.0) == 1.0:
+        kw["time_of_day"] = "day"
+    if "distortion" in kw:
+        kw["lens_distortion"] = kw.pop("distortion")
+    if kw.get("rain_drops_per_frame", 0) > 0:
+        kw["weather"] = "rain"
+    kw.setdefault("wind_mps", 3.0)
+    return EnvironmentSpec(**kw), options
+
+
 #: noise, blur, distortion and sway off: every pixel is a pure function of the scene
-EXACT = RenderParams(
-    sensor_noise_std_dn=0.0, motion_blur=False, distortion=False, branch_sway=False
-)
+EXACT_KW = dict(sensor_noise_std_dn=0.0, motion_blur=False, distortion=False, branch_sway=False)
+EXACT = settings(**EXACT_KW)
 
 
 def make_street(camera: CameraModel = PINHOLE, scenery: tuple[StaticObject, ...] = ()) -> Street:
@@ -49,10 +68,11 @@ def make_street(camera: CameraModel = PINHOLE, scenery: tuple[StaticObject, ...]
 
 
 def renderer(
-    params: RenderParams = EXACT, street: Street | None = None, seed: int = 0
+    params: tuple[EnvironmentSpec, RenderOptions] = EXACT, street: Street | None = None, seed: int = 0
 ) -> CameraRenderer:
     street = street or make_street()
-    return CameraRenderer(street.lamps[0].camera, street, params, np.random.default_rng(seed))
+    environment, options = params
+    return CameraRenderer(street.lamps[0].camera, street, environment, np.random.default_rng(seed), options)
 
 
 def walker(object_id: int, x: float, y: float, heading: float = math.pi / 2, **kw) -> AgentState:
@@ -91,7 +111,7 @@ def changed_box(before: np.ndarray, after: np.ndarray) -> tuple[int, int, int, i
 # ------------------------------------------------------------------ reproducibility
 def test_same_seed_same_frames_and_truth_bit_for_bit() -> None:
     street = make_street(BARREL, (StaticObject("tree", 15.0, 8.0, 3.0, 3.0, 6.0, 0.5),))
-    params = RenderParams(rain_drops_per_frame=40, insects_per_min=900.0, wind_mps=6.0)
+    params = settings(rain_drops_per_frame=40, insects_per_min=900.0, wind_mps=6.0)
     runs = []
     for _ in range(2):
         r = renderer(params, street, seed=42)
@@ -112,7 +132,7 @@ def test_same_seed_same_frames_and_truth_bit_for_bit() -> None:
 
 
 def test_indexed_frames_do_not_depend_on_the_frames_rendered_before() -> None:
-    params = RenderParams(rain_drops_per_frame=30, insects_per_min=1200.0)
+    params = settings(rain_drops_per_frame=30, insects_per_min=1200.0)
     agents = one_of_each(14.0)
     in_order = renderer(params, seed=5)
     frames = [in_order.render(k / 15.0, agents, [1.0, 0.0], frame_index=k) for k in range(6)]
@@ -169,7 +189,7 @@ def test_pedestrian_spans_the_rows_the_camera_model_gives() -> None:
 
 def test_distortion_moves_pixels_where_camera_project_says() -> None:
     street = make_street(BARREL)
-    params = RenderParams(
+    params = settings(
         sensor_noise_std_dn=0.0, motion_blur=False, distortion=True, branch_sway=False
     )
     cam = street.lamps[0].camera
@@ -188,7 +208,7 @@ def test_distortion_moves_pixels_where_camera_project_says() -> None:
 
 def test_distorted_background_is_the_remapped_pinhole_background() -> None:
     street = make_street(BARREL)
-    params = RenderParams(
+    params = settings(
         sensor_noise_std_dn=0.0, motion_blur=False, distortion=True, branch_sway=False
     )
     bent = renderer(params, street).render(0.0, [], [1.0, 1.0]).image.astype(np.float32)
@@ -256,7 +276,7 @@ def test_lamp_light_brightens_the_scene_around_its_pole() -> None:
     half = r.render(0.0, [], [0.0, 0.5]).image.astype(float)
     assert dark[patch].mean() < half[patch].mean() < lit[patch].mean()
     off = (
-        renderer(RenderParams(**{**EXACT.__dict__, "lamp_light": False}))
+        renderer(settings(**{**EXACT_KW, "lamp_light": False}))
         .render(0.0, [], [1.0, 1.0])
         .image
     )
@@ -284,7 +304,7 @@ def test_lit_agents_throw_a_spot_ahead_and_lit_agents_are_brighter() -> None:
 
 
 def test_day_light_removes_the_emitter_falloff() -> None:
-    def near_far_ratio(params: RenderParams) -> float:
+    def near_far_ratio(params: tuple[EnvironmentSpec, RenderOptions]) -> float:
         img = renderer(params).render(0.0, [], [0.0, 0.0]).image.astype(float)
         cam = PINHOLE.placed(x_m=CAM_X, y_m=CAM_Y)
         (u_n, v_n), (u_f, v_f) = cam.project(
@@ -293,14 +313,14 @@ def test_day_light_removes_the_emitter_falloff() -> None:
         return img[int(v_n), int(u_n)] / max(img[int(v_f), int(u_f)], 1.0)
 
     assert near_far_ratio(EXACT) > 3.0
-    assert near_far_ratio(RenderParams(**{**EXACT.__dict__, "ambient_light": 1.0})) < 1.3
+    assert near_far_ratio(settings(**{**EXACT_KW, "ambient_light": 1.0})) < 1.3
 
 
 # ------------------------------------------------------------------ effects
 def test_sensor_noise_has_the_requested_spread() -> None:
     std_dn = 4.0
     clean = renderer().render(0.0, [], [0.0, 0.0]).image.astype(float)
-    noisy_r = renderer(RenderParams(**{**EXACT.__dict__, "sensor_noise_std_dn": std_dn}), seed=3)
+    noisy_r = renderer(settings(**{**EXACT_KW, "sensor_noise_std_dn": std_dn}), seed=3)
     a = noisy_r.render(0.0, [], [0.0, 0.0]).image.astype(float)
     b = noisy_r.render(1.0 / 15, [], [0.0, 0.0]).image.astype(float)
     mid = (clean > 20) & (clean < 230)  # away from clipping at 0 and 255
@@ -312,7 +332,7 @@ def test_sensor_noise_has_the_requested_spread() -> None:
 def test_motion_blur_smears_along_the_image_motion() -> None:
     # a car crossing the view (heading +y) moves sideways in the image
     car = AgentState(4, "vehicle", 14.0, 4.0, math.pi / 2, 15.0, 4.4, 1.8, 1.5)
-    blur_params = RenderParams(**{**EXACT.__dict__, "motion_blur": True, "exposure_ms": 30.0})
+    blur_params = settings(**{**EXACT_KW, "motion_blur": True, "exposure_ms": 30.0})
     sharp_r, blur_r = renderer(), renderer(blur_params)
     empty = sharp_r.render(0.0, [], [0.0, 0.0]).image
     sharp = sharp_r.render(0.0, [car], [0.0, 0.0])
@@ -361,20 +381,20 @@ def test_insects_rain_and_swaying_crowns_change_pixels_but_not_truth() -> None:
     base = still.render(0.0, [], [0.0, 0.0]).image
     assert np.array_equal(base, still.render(0.7, [], [0.0, 0.0]).image)  # no sway: a static view
 
-    bugs = renderer(RenderParams(**{**EXACT.__dict__, "insects_per_min": 6000.0}), street)
+    bugs = renderer(settings(**{**EXACT_KW, "insects_per_min": 6000.0}), street)
     frames = [bugs.render(k / 15.0, [], [0.0, 0.0]) for k in range(5)]
     assert all(f.truth == () for f in frames)
     assert (
         max(int(cv2.absdiff(f.image, base).max()) for f in frames) > 60
     )  # bright blobs near the lens
 
-    rain = renderer(RenderParams(**{**EXACT.__dict__, "rain_drops_per_frame": 200}), street).render(
+    rain = renderer(settings(**{**EXACT_KW, "rain_drops_per_frame": 200}), street).render(
         0.0, [], [0.0, 0.0]
     )
     assert rain.truth == () and np.count_nonzero(cv2.absdiff(rain.image, base) > 3) > 500
 
     sway = renderer(
-        RenderParams(**{**EXACT.__dict__, "branch_sway": True, "wind_mps": 8.0}), street
+        settings(**{**EXACT_KW, "branch_sway": True, "wind_mps": 8.0}), street
     )
     frames = [sway.render(k / 5.0, [], [0.0, 0.0]).image for k in range(10)]  # two seconds
     moved = np.any([cv2.absdiff(frames[0], f) > 2 for f in frames[1:]], axis=0)
@@ -387,10 +407,10 @@ def test_insects_rain_and_swaying_crowns_change_pixels_but_not_truth() -> None:
 
 # ------------------------------------------------------------------ input errors
 def test_bad_inputs_raise_errors_that_name_the_field() -> None:
-    with pytest.raises(ValueError, match="ambient_light"):
-        RenderParams(ambient_light=2.0)
+    with pytest.raises(ValueError, match="wind_mps"):
+        EnvironmentSpec(wind_mps=-2.0)
     with pytest.raises(ValueError, match="motion_blur"):
-        RenderParams(motion_blur="yes")  # type: ignore[arg-type]
+        RenderOptions(motion_blur="yes")  # type: ignore[arg-type]
     r = renderer()
     with pytest.raises(ValueError, match="lamp_levels"):
         r.render(0.0, [], [1.0])
@@ -461,7 +481,7 @@ def test_frame_from_changed_boxes_is_the_whole_frame_converted() -> None:
     from citysim.render.output import FrameOutput, merge_boxes
 
     street = make_street(BARREL)
-    params = RenderParams(sensor_noise_std_dn=0.0, branch_sway=False)
+    params = settings(sensor_noise_std_dn=0.0, branch_sway=False)
     r = renderer(params, street)
     r.render(0.0, [], [1.0, 1.0])  # the still view is cached
     out: FrameOutput = r.output
@@ -495,7 +515,7 @@ def test_agents_moving_alike_share_one_smear_and_keep_their_own_truth(monkeypatc
         return original(*args, **kwargs)
 
     monkeypatch.setattr(render_agents, "composite", counting)
-    blur = RenderParams(**{**EXACT.__dict__, "motion_blur": True})
+    blur = settings(**{**EXACT_KW, "motion_blur": True})
     riders = [
         AgentState(1, "cyclist", 11.0, 4.0, math.pi / 2, 6.0, 1.7, 0.6, 1.8, gait_phase_rad=1.0),
         AgentState(2, "cyclist", 11.5, 4.8, math.pi / 2, 6.0, 1.7, 0.6, 1.8, gait_phase_rad=2.0),
@@ -539,7 +559,7 @@ def test_swaying_crowns_do_not_depend_on_the_frames_rendered_before() -> None:
         StaticObject("tree", 13.5, 8.0, 3.0, 3.0, 5.0, 0.5),
     )
     street = make_street(scenery=trees)
-    params = RenderParams(**{**EXACT.__dict__, "branch_sway": True, "wind_mps": 8.0})
+    params = settings(**{**EXACT_KW, "branch_sway": True, "wind_mps": 8.0})
     times = [k / 5.0 for k in range(8)]
     forward = renderer(params, street)
     ahead = [forward.render(t, [], [1.0, 0.0]).image for t in times]

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from citysim.world.agents import AgentState
-from citysim.render.camera import RenderParams
 from citysim.render.agents import AgentLighting, part_radiance
 from citysim.render.beams import BEAMS
 from citysim.render.canvas import Z_NEAR_M
@@ -17,6 +16,8 @@ from citysim.render.kernels import SUBPIXEL_BITS, fill_ranks, label_stats
 from citysim.render.models import agent_shape
 from citysim.render.spots import add_ground_spots, spot_class
 from tests.citysim.test_render import (
+    EXACT_KW,
+    settings,
     BARREL,
     EXACT,
     PINHOLE,
@@ -87,7 +88,7 @@ def test_parts_fill_the_pixels_whose_centres_they_hold(seed: int) -> None:
 
 
 def test_posed_parts_are_where_the_camera_model_projects_them() -> None:
-    r = renderer(RenderParams(**{**EXACT.__dict__, "motion_blur": True}))
+    r = renderer(settings(**{**EXACT_KW, "motion_blur": True}))
     agents = one_of_each(12.0)
     lamps = np.array([[25.0, 6.8, 6.0]])
     lighting = AgentLighting.of(80.0, 0.0, lamps, np.array([0.7]))
@@ -112,7 +113,7 @@ def test_posed_parts_are_where_the_camera_model_projects_them() -> None:
         # distance of the body centre and image motion over the exposure
         mid = np.array([[agent.x_m, agent.y_m, 0.5 * agent.height_m]])
         assert posed.view[i, 0] == pytest.approx(np.linalg.norm(cam.world_to_cam(mid)), rel=1e-9)
-        back_m = r.params.exposure_ms / 1000.0 * agent.speed_mps
+        back_m = r.environment.exposure_ms / 1000.0 * agent.speed_mps
         before = mid - back_m * np.array(
             [[math.cos(agent.heading_rad), math.sin(agent.heading_rad), 0.0]]
         )
@@ -121,7 +122,7 @@ def test_posed_parts_are_where_the_camera_model_projects_them() -> None:
 
 
 def test_label_statistics_match_a_remapped_label_image() -> None:
-    r = renderer(RenderParams(sensor_noise_std_dn=0.0), make_street(BARREL))
+    r = renderer(settings(sensor_noise_std_dn=0.0), make_street(BARREL))
     canvas = r.canvas
     rng = np.random.default_rng(3)
     labels = np.zeros(canvas.shape, np.uint8)

@@ -12,9 +12,10 @@ import pytest
 from detector.camera import CameraModel
 from detector.classes import CLASSES
 from detector.features import FEATURE_NAMES
+from detector.train.config import TrainingConfig
 from detector.train.regions import shape_region
 from detector.train.samplers import FEATURE_NOISE, NOISE_SAMPLERS
-from detector.train.sets import TrainingConfig, make_training_samples, make_training_set
+from detector.train.sets import make_training_samples, make_training_set
 from detector.train.shapes import pedestrian_shape
 from tests.detector.cameras import scene_b
 

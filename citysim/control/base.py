@@ -1,0 +1,106 @@
+"""What every controller shares: its context, the lamp bank of holds, and the base class.
+
+A controller owns one decision-maker per lamp and is fed by the simulation loop
+(``citysim.sim.loop``): camera frames at the camera's frame rate (only if ``uses_camera``),
+agent snapshots at the physics rate (PIR needs them: it senses heat, not pixels) and network
+messages. It decides by calling ``bank.trigger`` (light this lamp now and keep it lit for the
+hold time) or by setting lamp targets; the ``LampBank`` releases lamps after the hold time.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+from citysim.config.scenario import ControllerSpec
+from citysim.config.street import LuminaireSpec
+from citysim.control.lamps import Lamp
+from citysim.control.network import Network
+from citysim.world.agents import AgentState
+from citysim.world.street import Street
+
+
+@dataclass
+class ControlContext:
+    """What every controller may read: the street, the lamps, their luminaire and the network."""
+
+    street: Street
+    lamps: list[Lamp]
+    luminaire: LuminaireSpec  # the scenario's, with the controller's own hold_s if it sets one
+    frame_period_s: float
+    rng: np.random.Generator
+    network: Network
+    start_hour: float = 22.0
+    spec: ControllerSpec = field(default_factory=lambda: ControllerSpec(name="always_on"))
+
+    @property
+    def hold_s(self) -> float:
+        return self.luminaire.hold_s
+
+    @property
+    def dim_level(self) -> float:
+        return self.luminaire.dim_level
+
+
+class LampBank:
+    """Lamps lit by triggers and released to dim after the hold time."""
+
+    def __init__(self, ctx: ControlContext):
+        self.ctx = ctx
+        self.lit_until_s = np.full(len(ctx.lamps), -math.inf)
+        self.first_trigger_s = np.full(len(ctx.lamps), math.nan)
+        self.last_trigger_s = np.full(len(ctx.lamps), math.nan)
+        self.triggers = np.zeros(len(ctx.lamps), dtype=np.int64)
+
+    def trigger(self, lamp_index: int, t_s: float, hold_s: float | None = None) -> None:
+        if self.triggers[lamp_index] == 0:
+            self.first_trigger_s[lamp_index] = t_s
+        self.last_trigger_s[lamp_index] = t_s
+        self.triggers[lamp_index] += 1
+        until = t_s + (self.ctx.hold_s if hold_s is None else hold_s)
+        if until > self.lit_until_s[lamp_index]:
+            self.lit_until_s[lamp_index] = until
+        lamp = self.ctx.lamps[lamp_index]
+        if lamp.target_level < 1.0:
+            lamp.set_target(t_s, 1.0)
+
+    def release_expired(self, t_s: float) -> None:
+        """Called every physics step: lamps whose hold ran out go back to dim."""
+        for i in np.flatnonzero(self.lit_until_s <= t_s):
+            lamp = self.ctx.lamps[i]
+            if lamp.target_level > self.ctx.dim_level:
+                lamp.set_target(t_s, self.ctx.dim_level)
+
+
+class Controller:
+    """Base: a named way of switching the lamps. Subclasses override the hooks they need."""
+
+    name: ClassVar[str] = ""
+    uses_camera: ClassVar[bool] = False
+    senses: ClassVar[bool] = True  # pays the sensing power (camera/board/IR or PIR)
+    initial_level: ClassVar[str] = "dim"  # "dim" or "full"
+
+    def __init__(self, ctx: ControlContext):
+        self.ctx = ctx
+        self.bank = LampBank(ctx)
+
+    def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
+        self.bank.release_expired(t_s)
+
+    def on_frame(self, lamp_index: int, t_s: float, image: np.ndarray) -> list | None:
+        """Handle one camera frame; return the detector's detections if there are any (for confusion metrics)."""
+        return None
+
+    def on_message(self, lamp_index: int, t_s: float, message) -> None:
+        pass
+
+    def motion_seen(self, lamp_index: int) -> bool:
+        """Does this lamp's camera need every frame now? (see ``citysim.sim.cameras.CameraSchedule``)
+
+        True while its last judged frame held a moving region.
+        """
+        return False
