@@ -33,17 +33,19 @@ import numpy as np
 
 from citysim.render import light
 from citysim.render.canvas import BoxMinimum, Canvas, canvas_hull_px, overlapping_groups, roi_of
+from citysim.render.crowns import (
+    SWAY_M_PER_MPS,
+    SWAY_MIN_PX,
+    SWAY_POSES,
+    CrownSprite,
+    draw_sway,
+    sway_px,
+)
 from citysim.render.scenery import Ellipsoid, Solid, _grain, ground_reflectance, scenery_parts
 from citysim.world.street import Street
 
 #: A lamp whose light adds less than this radiance anywhere in view is ignored.
 POOL_MIN_RADIANCE = 2e-5
-#: Crown displacement per unit wind speed, m per (m/s).
-SWAY_M_PER_MPS = 0.025
-#: A swaying crown is pre-rendered in this many positions across its sway.
-SWAY_POSES = 9
-#: Crowns whose sway moves them less than this in the image (px) are drawn still.
-SWAY_MIN_PX = 0.4
 #: Leaf texture: crowns are patchy, not painted boxes.
 LEAF_TEXTURE_AMPLITUDE = 0.3
 FAR_DEPTH_M = 1e9
@@ -56,33 +58,6 @@ class LampPool:
     lamp_index: int
     roi: tuple[int, int, int, int]
     radiance: np.ndarray
-
-
-@dataclass(frozen=True, eq=False)
-class CrownSprite:
-    """A swaying tree crown over canvas box ``roi`` (margins for the sway included).
-
-    The sway moves the crown along one image direction, so it is pre-rendered
-    in SWAY_POSES positions from one extreme to the other; each frame shows
-    the pose nearest the wind's current offset. Per pose: coverage (alpha,
-    already cut where nearer static things stand before the crown), radiance
-    x alpha without lamps and per lamp at level 1.
-    """
-
-    roi: tuple[int, int, int, int]
-    near_m: float  # distance to the crown's nearest visible point: its depth for occlusion
-    alpha: tuple[np.ndarray, ...]  # per pose
-    covered: tuple[np.ndarray, ...]  # per pose, bool: alpha > 1/2 (where it hides what is behind)
-    base: tuple[np.ndarray, ...]  # per pose
-    pools: tuple[tuple[int, tuple[np.ndarray, ...]], ...]  # (lamp index, per pose)
-    freq_hz: float
-    phases_rad: tuple[float, float]
-
-    def pose(self, t_s: float) -> int:
-        """Index of the pre-rendered pose nearest the sway at time t (a gust-like sum of two sines)."""
-        w = 2.0 * math.pi * self.freq_hz * t_s
-        s = 0.75 * math.sin(w + self.phases_rad[0]) + 0.25 * math.sin(2.3 * w + self.phases_rad[1])
-        return round((s + 1.0) / 2.0 * (len(self.alpha) - 1))
 
 
 @dataclass(frozen=True)
@@ -153,24 +128,6 @@ def _cast_solids(
     return depth, normals, rho
 
 
-def _draw_sway(rng: np.random.Generator) -> tuple[float, float, tuple[float, float]]:
-    """One crown's wind: direction (rad from +x), frequency (Hz) and two phases (rad)."""
-    angle = float(rng.uniform(-0.4, 0.4))
-    freq_hz = float(rng.uniform(0.25, 0.6))
-    return angle, freq_hz, (float(rng.uniform(0, 2 * math.pi)), float(rng.uniform(0, 2 * math.pi)))
-
-
-def _sway_px(canvas: Canvas, crown: Ellipsoid, amplitude_m: float) -> float:
-    """Largest image motion (px) of the crown's centre when it sways ``amplitude_m``; 0 if unseen."""
-    if amplitude_m <= 0.0:
-        return 0.0
-    c = crown.centre_m
-    uv = canvas.project(np.array([c, c + [amplitude_m, 0.0, 0.0], c + [0.0, amplitude_m, 0.0]]))
-    if not np.all(np.isfinite(uv)):
-        return 0.0
-    return float(np.abs(uv[1:] - uv[0]).max())
-
-
 class StaticScene:
     """Everything about one camera's view that does not move (see module docstring)."""
 
@@ -192,8 +149,8 @@ class StaticScene:
         amplitude_m = SWAY_M_PER_MPS * wind_mps if sway else 0.0
         # every crown draws its sway whether or not it moves in this view, so the random
         # stream does not depend on what this camera sees
-        sway_draws = [_draw_sway(rng) for _ in parts.crowns]
-        swaying = [_sway_px(canvas, c, amplitude_m) >= SWAY_MIN_PX for c in parts.crowns]
+        sway_draws = [draw_sway(rng) for _ in parts.crowns]
+        swaying = [sway_px(canvas, c, amplitude_m) >= SWAY_MIN_PX for c in parts.crowns]
         baked = tuple(c for c, moves in zip(parts.crowns, swaying, strict=True) if not moves)
         depth, normals, rho = _cast_solids(canvas, parts.solids + baked, n)
         self.occluder_depth = (

@@ -25,8 +25,8 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from citysim.world.agents import AgentState
 from citysim.render.canvas import Canvas, roi_of
+from citysim.world.agents import AgentState
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from citysim.config.scenario import EnvironmentSpec
-from citysim.world.agents import AgentState
 from citysim.render.agents import AgentLighting, AgentPainter, DrawnAgent
 from citysim.render.background import ShadingInputs, StaticScene
 from citysim.render.beams import (
@@ -56,6 +55,7 @@ from citysim.render.kernels import label_stats
 from citysim.render.models import AGENT_MODELS, prepare_models
 from citysim.render.output import FrameOutput
 from citysim.render.spots import add_ground_spots, spot_reach
+from citysim.world.agents import AgentState
 from citysim.world.street import Street
 from detector.camera import CameraModel
 

@@ -20,8 +20,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from citysim.world.agents import AgentState
 from citysim.render.outline import KnownTopology, model_topology
+from citysim.world.agents import AgentState
 from detector.train.shapes import (
     Shape,
     animal_shape,

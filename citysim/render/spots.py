@@ -27,10 +27,10 @@ from functools import cache
 import cv2
 import numpy as np
 
-from citysim.world.agents import AgentState
 from citysim.render.background import StaticScene
 from citysim.render.beams import BEAMS, BeamSpec
 from citysim.render.kernels import add_spots as add_spot_cells
+from citysim.world.agents import AgentState
 
 #: Spots are accumulated on a grid this many times coarser than the canvas (they are smooth).
 SPOT_GRID = 4

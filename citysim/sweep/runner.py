@@ -72,7 +72,7 @@ def run_point(
     point: SweepPoint, scenario: Scenario, controllers: Sequence[str], save_objects: bool
 ) -> PointResult:
     """The Dask task: every controller of ``scenario`` on one point. Never raises: failures are rows."""
-    from citysim.sim.loop import run_comparison
+    from citysim.sim.compare import run_comparison
 
     t0 = time.perf_counter()
     files: dict[str, str] = {}
