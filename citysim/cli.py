@@ -47,26 +47,12 @@ def cmd_run(args) -> int:
                              scenario_file=str(args.scenario))
     from citysim.report.run_plots import plot_run
 
+    from citysim.report.table import comparison_table
+
     plot_run(args.out)
     print(comparison_table(summary))
     print(f"\nresults written to {args.out}/: summary.json, objects.csv, lamps.csv, plots/")
     return 0
-
-
-def comparison_table(summary: dict) -> str:
-    """A plain-text table of the headline figures, one line per controller."""
-    head = f"{'controller':<20} {'energy kWh':>10} {'savings':>8} {'lag p50 s':>9} {'lag p95 s':>9} {'lag max s':>9} " \
-           f"{'dark s':>8} {'unlit':>6} {'switches':>8} {'false on s':>10}"
-    lines = [f"{summary['scenario']}: {summary['duration_s']:.0f} s simulated, seed {summary['seed']}", head, "-" * len(head)]
-
-    def num(v, fmt):
-        return format(v, fmt) if v is not None else "-"
-
-    for name, c in summary["controllers"].items():
-        lines.append(f"{name:<20} {c['energy_kwh']:>10.3f} {c['savings_vs_always_on']:>8.1%} {num(c['lag_p50_s'], '9.2f')} "
-                     f"{num(c['lag_p95_s'], '9.2f')} {num(c['lag_max_s'], '9.2f')} {c['dark_exposure_s']:>8.1f} "
-                     f"{c['unlit_crossings']:>6d} {c['switches']:>8d} {c['false_on_time_s']:>10.0f}")
-    return "\n".join(lines)
 
 
 def cmd_render(args) -> int:

@@ -130,6 +130,11 @@ class ControllerSpec(Spec):
     hold_s: float | None = Field(
         default=None, ge=0, le=3600, description="overrides lamps.luminaire.hold_s"
     )
+    lead_s: float | None = Field(
+        default=None, ge=0, le=60,
+        description="detector_located: light zones a target enters within this many seconds "
+        "(plus a class margin); default: ramp + radio latency + one frame",
+    )
     schedule: tuple[ScheduleStep, ...] = ()
 
     @model_validator(mode="before")

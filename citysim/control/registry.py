@@ -9,9 +9,14 @@ from citysim.control.base import Controller
 from citysim.control.camera import Threshold05, Threshold5
 from citysim.control.clock import AlwaysOn, Schedule
 from citysim.control.detecting import DetectorConfirmed, DetectorNetwork, DetectorPerFrame
+from citysim.control.located import DetectorLocated
+from citysim.control.oracle import Oracle
 from citysim.control.pir import PassiveInfrared
 
 CONTROLLERS: dict[str, type[Controller]] = {
     cls.name: cls
-    for cls in (AlwaysOn, Schedule, PassiveInfrared, Threshold5, Threshold05, DetectorPerFrame, DetectorConfirmed, DetectorNetwork)
-}
+    for cls in (
+        AlwaysOn, Oracle, Schedule, PassiveInfrared, Threshold5, Threshold05,
+        DetectorPerFrame, DetectorConfirmed, DetectorNetwork, DetectorLocated,
+    )
+}  # fmt: skip

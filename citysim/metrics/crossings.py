@@ -50,7 +50,13 @@ class CrossingsCollector(Collector):
         summary = self.zones.summary()
         overall = summary["overall"]
         per_class_keys = ("objects", "lag_p50_s", "lag_p95_s", "lag_max_s")
+        entries = overall["visits"]
         return {
+            # the planner's darkness axis: share of zone entries whose lamp was already at the
+            # level the object needs (None without entries)
+            "lit_on_entry_rate": overall["lit_on_entry_fraction"],
+            "zone_entries": entries,
+            "dark_s_per_100_entries": 100.0 * overall["dark_exposure_total_s"] / entries if entries else None,
             "lag_p50_s": overall["lag_p50_s"],
             "lag_p95_s": overall["lag_p95_s"],
             "lag_max_s": overall["lag_max_s"],

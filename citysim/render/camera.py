@@ -12,9 +12,10 @@ linear radiance (``render_light``):
 2. headlight and flashlight spots on the ground (``render_spots``);
 3. agents far to near, motion-blurred, hidden behind nearer standing things
    (``render_agents``, ``render_clusters``);
-4. glare blobs of carried lights and lamp heads, rain, insects (``render_beams``,
-   ``render_effects``);
-5. camera response to 8 bits, lens distortion by one remap, sensor noise.
+4. glare blobs of carried lights and lamp heads (``render.beams``), then the camera effects
+   of ``render.effects`` (rain, insects);
+5. camera response to 8 bits, lens distortion by one remap, then the effects' frame filters
+   (sensor noise).
 
 Rendering a frame must cost less than detecting it. Step 5 is cached for the
 still view and redone only in the canvas boxes steps 1-4 drew on
@@ -50,7 +51,8 @@ from citysim.render.beams import (
     glare,
 )
 from citysim.render.canvas import build_canvas
-from citysim.render.effects import Insects, SensorNoise, draw_rain
+from citysim.render.effects.common import EffectFrame
+from citysim.render.effects.registry import EFFECTS
 from citysim.render.kernels import label_stats
 from citysim.render.models import AGENT_MODELS, prepare_models
 from citysim.render.output import FrameOutput
@@ -141,12 +143,9 @@ class CameraRenderer:
         self._shown_at = self.canvas.frame_to_canvas_index()
         no_uv = np.zeros((0, 0), np.float32)
         self._frame_uv = self.canvas.frame_uv or (no_uv, no_uv)
-        self.noise = (
-            SensorNoise(rng, camera.height_px, camera.width_px, env.sensor_noise_std_dn)
-            if env.sensor_noise_std_dn > 0.0
-            else None
-        )
-        self.insects = Insects(env.insects_per_min, int(rng.integers(2**63)))
+        # built in registry order: effects draw their seeds from rng in that order
+        built = (effect.build(env, self.canvas, rng) for effect in EFFECTS.values())
+        self.effects = [effect for effect in built if effect is not None]
         self._frame_seed = int(rng.integers(2**63))
         pole, heading = camera.position_m, camera.heading_unit
         self._forward_axis = (float(pole[0]), float(pole[1]), float(heading[0]), float(heading[1]))
@@ -227,33 +226,13 @@ class CameraRenderer:
         pts, power, size = agent_glare_sources(self.canvas, agents, ambient)
         boxes += glare(self.canvas, img, depth, pts, power, size, wet)
         exposure_s = self.environment.exposure_ms / 1000.0
-        if wet:
-            rng = (
-                self.rng
-                if frame_index is None
-                else np.random.default_rng([self._frame_seed, frame_index])
-            )
-            draw_rain(
-                self.canvas,
-                img,
-                self.rain_drops_per_frame,
-                exposure_s,
-                emitter,
-                ambient,
-                rng,
-            )
-            boxes.append((0, 0, self.canvas.width_px, self.canvas.height_px))
-        boxes += self.insects.draw(
-            self.canvas, img, max(t_s, 0.0), exposure_s, emitter, ambient
-        )
-
+        effect_frame = EffectFrame(self.canvas, img, t_s, exposure_s, emitter, ambient, self.rng,
+                                   self._frame_seed, frame_index)  # fmt: skip
+        for effect in self.effects:
+            boxes += effect.draw(effect_frame)
         frame = self.output.finish(boxes)
-        if self.noise is not None:
-            if frame_index is None:
-                pick = self.noise.pick(self.rng)
-            else:
-                pick = self.noise.pick_for(self._frame_seed, frame_index)
-            frame = self.noise.apply(frame, pick)
+        for effect in self.effects:
+            frame = effect.filter(frame, effect_frame)
         truth = self._truth(agents, drawn, labels) if drawn else ()
         return RenderedFrame(frame, truth)
 

@@ -27,18 +27,44 @@ from tqdm import tqdm
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.registry import CONTROLLERS
 from citysim.metrics.crossings import OBJECTS_CSV_HEADER
+from citysim.world.coverage import camera_coverage
+from citysim.world.street import build_street
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.loop import check_controllers, controller_spec, run_controller
 from detector.outdir import staged_output
 
 
+#: Every comparison holds these (savings are against always-on, and against the oracle's bound,
+#: measured on the same night), first, in this order.
+REFERENCE_CONTROLLERS = ("always_on", "oracle")
+
+
 def resolve_controllers(scenario: Scenario, names: Sequence[str] | None) -> list[ControllerSpec]:
-    """The specs to run: the scenario's own list, or the names given (with always_on first, always)."""
+    """The specs to run: the scenario's own list, or the names given, with always_on and the
+    oracle first whether named or not."""
     specs = list(scenario.controllers) if not names else [controller_spec(scenario, n) for n in names]
     check_controllers([s.name for s in specs])
-    if not any(s.name == "always_on" for s in specs):
-        specs.insert(0, ControllerSpec(name="always_on"))  # savings are always against always-on, same run
+    for position, name in enumerate(REFERENCE_CONTROLLERS):
+        if not any(s.name == name for s in specs):
+            specs.insert(position, ControllerSpec(name=name))
     return specs
+
+
+def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
+    """Each controller's savings as a share of the oracle's (1: as much as the bound, None without
+    an oracle or when the oracle saves nothing), placed after ``savings_vs_always_on``."""
+    oracle = next((r for r in results.values() if r["controller"] == "oracle"), None)
+    bound = oracle["savings_vs_always_on"] if oracle else None
+    out = {}
+    for label, result in results.items():
+        share = result["savings_vs_always_on"] / bound if bound else None
+        ordered = {}
+        for key, value in result.items():
+            ordered[key] = value
+            if key == "savings_vs_always_on":
+                ordered["savings_vs_oracle"] = share
+        out[label] = ordered
+    return out
 
 
 def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None) -> dict:
@@ -81,7 +107,8 @@ def run_comparison(
     specs = resolve_controllers(scenario, controllers)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
-               "duration_s": scenario.duration_s, "lamps": None, "controllers": {}}
+               "duration_s": scenario.duration_s, "lamps": None,
+               "coverage": camera_coverage(build_street(scenario)).as_dict(), "controllers": {}}
     with staged_output(out_dir) if out_dir is not None else _scratch() as stage:
         parts = stage / ".parts"
         total_s = scenario.duration_s * len(specs)
@@ -112,8 +139,8 @@ def run_comparison(
                     while not q.empty():
                         bar.update(q.get())
         bar.close()
-        for spec in specs:
-            summary["controllers"][spec.display_name] = results[spec.display_name]
+        results = with_savings_vs_oracle({spec.display_name: results[spec.display_name] for spec in specs})
+        summary["controllers"] = results
         summary["lamps"] = scenario.lamps.count or len(scenario.lamps.positions_x_m)
         _merge_parts(parts, [s.display_name for s in specs], stage)
         shutil.rmtree(parts, ignore_errors=True)

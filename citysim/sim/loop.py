@@ -39,7 +39,8 @@ from citysim.sim.night import Night, build_night
 
 #: The keys of one controller's summary, in the order summary.json lists them.
 SUMMARY_KEYS = (
-    "controller", "energy_kwh", "savings_vs_always_on", "lag_p50_s", "lag_p95_s", "lag_max_s",
+    "controller", "energy_kwh", "savings_vs_always_on", "lit_on_entry_rate", "zone_entries",
+    "dark_s_per_100_entries", "lag_p50_s", "lag_p95_s", "lag_max_s",
     "dark_exposure_s", "unlit_crossings", "switches", "on_time_s", "false_on_time_s",
     "energy_per_hour_kwh", "energy_split_kwh", "objects", "per_class", "detection",
     "lamp_triggers", "network", "agents_spawned",
@@ -80,7 +81,7 @@ def build_controller(night: Night, spec: ControllerSpec) -> Controller:
     return controller_cls(ctx)
 
 
-def _deliver(night: Night, controller: Controller, lamp_index: int):
+def deliver_messages(night: Night, controller: Controller, lamp_index: int):
     """simpy process: lamp ``lamp_index``'s network messages to the controller, as they arrive."""
     store = controller.ctx.network.inbox(lamp_index)
     while True:
@@ -137,7 +138,7 @@ def run_controller(
         # frames come half a physics step after the physics tick they show, so both orderings agree
         night.env.process(film(night, night.renderers(), controller, lamps, collectors))
     for i in range(len(lamps)):
-        night.env.process(_deliver(night, controller, i))
+        night.env.process(deliver_messages(night, controller, i))
     _run_clock(night, collectors, on_progress)
 
     t_end = scenario.duration_s

@@ -89,7 +89,7 @@ def run_point(
     files["summary.json"] = json.dumps(summary, indent=2, sort_keys=True)
     wall_s = time.perf_counter() - t0
     stamp = datetime.now(UTC).isoformat(timespec="milliseconds")
-    reserved = set(IDENTITY_COLUMNS) | set(point.axes) | {"n_lamps", "duration_s"}
+    reserved = set(IDENTITY_COLUMNS) | set(point.axes) | {"n_lamps", "duration_s", "camera_coverage"}
     rows = []
     figures_by_controller = summary.get("controllers", {})
     for c in controllers:
@@ -106,6 +106,7 @@ def run_point(
                 "wall_s": round(wall_s, 3),
                 "n_lamps": summary.get("lamps"),
                 "duration_s": summary.get("duration_s"),
+                "camera_coverage": summary.get("coverage", {}).get("street_seen"),
                 **flatten_summary(figures, reserved),
             }
         )

@@ -57,9 +57,18 @@ def _scale_traffic(scenario: Scenario, factor: float) -> dict[str, float]:
     }
 
 
+def _lead_time(scenario: Scenario, seconds: float) -> dict[str, float]:
+    """Overrides that give every controller which lights ahead (``lead_s``) this lead time."""
+    if not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or seconds < 0:
+        raise ScenarioError(f"lead_s: seconds >= 0, got {seconds!r}")
+    return {f"controllers.{i}.lead_s": float(seconds) for i, c in enumerate(scenario.controllers)
+            if c.name == "detector_located"}  # fmt: skip
+
+
 #: Axes that are not one scenario field: name -> (scenario, value) -> dotted-path overrides.
 DERIVED_AXES: dict[str, Callable[[Scenario, Any], dict[str, Any]]] = {
     "traffic_density": _scale_traffic,
+    "lead_s": _lead_time,
 }
 
 AxisValue = int | float | str | bool

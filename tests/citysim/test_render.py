@@ -544,7 +544,7 @@ def test_ground_spots_touch_only_the_boxes_they_return() -> None:
 
 
 def test_noise_fields_per_frame_index_are_fixed_and_varied() -> None:
-    from citysim.render.effects import SensorNoise
+    from citysim.render.effects.noise import SensorNoise
 
     picks = {SensorNoise.pick_for(7, k) for k in range(200)}
     assert len(picks) > 190  # hardly any repeats

@@ -1,24 +1,6 @@
-"""Things in front of the scene that are not targets, and the sensor's noise.
-
-* ``SensorNoise``: Gaussian read noise in DN. Drawing 77 k normals per frame
-  costs ~0.7 ms in numpy, a third of the frame budget, so a small bank of
-  noise frames is drawn once from the run's generator and every frame takes a
-  random crop, shift and sign of one of them (8 x 33 x 33 x 2 = 17 k distinct
-  fields; any one pixel's values over time stay Gaussian and independent
-  enough for a background model). The noise is rounded to whole DN, as the
-  sensor's converter would.
-* ``Rain``: drops close to the lens, lit by the emitter and smeared by the
-  exposure into short near-vertical streaks.
-* ``Insects``: moths at the emitter, 0.15-1.5 m from the lens: big, bright,
-  out-of-focus blobs that cross the view fast (a classic false trigger).
-  They arrive as a Poisson process, drift and loop, and vanish when their
-  time is up; the process is a pure function of time for its seed.
-
-All randomness comes from the ``numpy.random.Generator`` given to the
-renderer (or generators seeded from it), so a seed fixes every frame. Conventions: canvas
-pixels of ``citysim.render.canvas``; camera frame x right, y down, z forward
-(m); radiance in linear full-scale units.
-"""
+"""Insects at the emitter: moths 0.15-1.5 m from the lens, big, bright, out-of-focus blobs that
+cross the view fast (a classic false trigger). They arrive as a Poisson process, drift and loop,
+and vanish when their time is up; the process is a pure function of time for its seed."""
 
 from __future__ import annotations
 
@@ -28,107 +10,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from citysim.config.scenario import EnvironmentSpec
 from citysim.render.canvas import Canvas, roi_of
-
-NOISE_BANK_FRAMES = 8
-NOISE_SHIFT_PX = 32
-_MASK64 = (1 << 64) - 1
-
-
-class SensorNoise:
-    """Additive Gaussian read noise with standard deviation ``std_dn`` (DN), rounded to whole DN."""
-
-    def __init__(
-        self, rng: np.random.Generator, height_px: int, width_px: int, std_dn: float
-    ) -> None:
-        self.std_dn = std_dn
-        shape = (NOISE_BANK_FRAMES, height_px + NOISE_SHIFT_PX, width_px + NOISE_SHIFT_PX)
-        dn = np.clip(np.rint(rng.standard_normal(shape, dtype=np.float32) * std_dn), -255, 255)
-        # signed noise as two saturating uint8 steps (add the positive part, subtract the
-        # negative): exact, since a pixel's noise has one sign, and far cheaper than a
-        # mixed-type weighted sum
-        self.up = np.maximum(dn, 0).astype(np.uint8)
-        self.down = np.maximum(-dn, 0).astype(np.uint8)
-        self.shape = (height_px, width_px)
-
-    @staticmethod
-    def pick(rng: np.random.Generator) -> tuple[int, int, int, int]:
-        """A random (bank frame, row shift, column shift, sign) from ``rng``."""
-        return tuple(
-            rng.integers((NOISE_BANK_FRAMES, NOISE_SHIFT_PX + 1, NOISE_SHIFT_PX + 1, 2)).tolist()
-        )
-
-    @staticmethod
-    def pick_for(seed: int, frame_index: int) -> tuple[int, int, int, int]:
-        """The (bank frame, row shift, column shift, sign) of frame ``frame_index``: a
-        splitmix64 hash of the seed and index (a generator per frame costs more than the
-        noise itself)."""
-        x = (seed + (frame_index + 1) * 0x9E3779B97F4A7C15) & _MASK64
-        x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
-        x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK64
-        x ^= x >> 31
-        out = []
-        for n in (NOISE_BANK_FRAMES, NOISE_SHIFT_PX + 1, NOISE_SHIFT_PX + 1, 2):
-            x, r = divmod(x, n)
-            out.append(r)
-        return tuple(out)
-
-    def apply(self, frame_u8: np.ndarray, pick: tuple[int, int, int, int]) -> np.ndarray:
-        """``frame_u8`` plus the noise field ``pick`` (see ``pick``): a fresh array."""
-        b, dy, dx, sign = pick
-        h, w = self.shape
-        up, down = (self.up, self.down) if sign else (self.down, self.up)
-        out = cv2.add(frame_u8, up[b, dy : dy + h, dx : dx + w])
-        return cv2.subtract(out, down[b, dy : dy + h, dx : dx + w], dst=out)
-
-
-#: Terminal speed of rain drops, m/s.
-RAIN_FALL_MPS = 6.0
-RAIN_NEAR_M, RAIN_FAR_M = 0.3, 5.0
-#: Drop radiance x m^2 under the emitter (small, out of focus, but close).
-RAIN_RADIANCE_M2 = 0.02
-
-
-def draw_rain(
-    canvas: Canvas,
-    img: np.ndarray,
-    n_drops: int,
-    exposure_s: float,
-    emitter_power: float,
-    ambient_light: float,
-    rng: np.random.Generator,
-) -> None:
-    """Add ``n_drops`` streaks (random depth and position) to ``img``."""
-    if n_drops <= 0:
-        return
-    cam = canvas.camera
-    u = rng.uniform(0.0, canvas.width_px, n_drops)
-    v = rng.uniform(0.0, canvas.height_px, n_drops)
-    z = RAIN_FAR_M / (
-        1.0 + rng.uniform(0.0, RAIN_FAR_M / RAIN_NEAR_M - 1.0, n_drops)
-    )  # more drops far
-    slant = rng.normal(0.0, 0.08, n_drops)
-    # a drop falls straight down in the world; its image direction follows the world's down axis
-    down_cam = cam.rotation_world_to_cam @ np.array([0.0, 0.0, -1.0])
-    fall_m = RAIN_FALL_MPS * max(exposure_s, 1e-3)
-    du = cam.fx_px * (down_cam[0] + slant) * fall_m / z
-    dv = cam.fy_px * down_cam[1] * fall_m / z
-    radiance = (
-        RAIN_RADIANCE_M2 * (emitter_power * (1.0 - ambient_light) + 20.0 * ambient_light) / z**2
-    )
-    radiance = np.minimum(radiance / np.maximum(np.hypot(du, dv), 1.0) * 4.0, 0.6)
-    layer = np.zeros(canvas.shape, np.float32)
-    pts = np.stack([np.column_stack([u, v]), np.column_stack([u + du, v + dv])], axis=1)
-    fixed = np.round(pts * 16).astype(np.int32)
-    levels = np.quantile(radiance, [0.0, 0.5, 0.9, 1.0])
-    for lo, hi in zip(levels[:-1], levels[1:], strict=True):
-        sel = (radiance >= lo) & (radiance <= hi)
-        if sel.any():
-            cv2.polylines(
-                layer, list(fixed[sel]), False, float(radiance[sel].mean()), 1, cv2.LINE_8, 4
-            )
-    cv2.add(img, layer, dst=img)
-
+from citysim.render.effects.common import Box, CameraEffect, EffectFrame
 
 INSECT_NEAR_M, INSECT_FAR_M = 0.15, 1.5
 INSECT_DRIFT_MPS = 0.6
@@ -275,3 +159,20 @@ class Insects:
             layer, float(min(brightness, 50.0) * core_px / (core_px + streak_px)), view, dst=view
         )
         return roi
+
+
+class InsectsEffect(CameraEffect):
+    """``EnvironmentSpec.insects_per_min`` moths crossing the view."""
+
+    def __init__(self, insects: Insects) -> None:
+        self.insects = insects
+
+    @classmethod
+    def build(cls, environment: EnvironmentSpec, canvas: Canvas, rng: np.random.Generator) -> InsectsEffect:
+        # the seed is drawn even on a night without insects, so the renderer's later draws do
+        # not depend on whether insects fly
+        return cls(Insects(environment.insects_per_min, int(rng.integers(2**63))))
+
+    def draw(self, frame: EffectFrame) -> list[Box]:
+        return self.insects.draw(frame.canvas, frame.img, max(frame.t_s, 0.0), frame.exposure_s,
+                                 frame.emitter_power, frame.ambient_light)  # fmt: skip

@@ -1,0 +1,81 @@
+"""The planner's headline: savings against the share of people who meet a lit street.
+
+Each controller is one point: x is its ``lit_on_entry_rate`` (the share of zone entries whose
+lamp was already at full level), y its savings against always-on lamps on the same night. The
+ideal corner is top right (all savings, nobody in the dark); the oracle marks the most any
+controller can save with everyone lit. For a sweep, each controller draws one point per setting.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from citysim.report.common import controller_color, plt, save
+
+#: The sentence a planner reads beside the plot.
+HOW_TO_READ = (
+    "Each point is a controller: further right, fewer people walk or drive into a dim zone; "
+    "higher, more energy saved against always-on lamps. The best controllers sit near the "
+    "oracle (perfect knowledge of where everyone is), top right; a point low or to the left "
+    "buys its savings with darkness or its light with energy."
+)
+
+
+def _axes(title: str):
+    fig, ax = plt.subplots(figsize=(7.0, 5.0))
+    ax.set_xlabel("lit on entry (share of zone entries already at full level)")
+    ax.set_ylabel("savings against always-on")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.xaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: f"{100 * v:.0f} %"))
+    ax.yaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: f"{100 * v:.0f} %"))
+    return fig, ax
+
+
+def _finish(fig, ax, points: Sequence[tuple[float, float]], path: Path) -> Path:
+    xs = [x for x, _ in points] + [1.0]
+    ys = [y for _, y in points] + [0.0]
+    ax.set_xlim(min(xs) - 0.05, 1.02)
+    ax.set_ylim(min(0.0, min(ys)) - 0.02, max(ys) + 0.08)
+    ax.annotate("ideal", (1.0, max(ys) + 0.06), ha="right", va="top", fontsize=8, color="#555")
+    ax.legend(fontsize=7, loc="lower left")
+    return save(fig, path)
+
+
+def plot_frontier(controllers: Mapping[str, Mapping], path: Path, title: str = "savings vs darkness") -> Path | None:
+    """One point per controller of a run (summary.json's ``controllers``); None without figures."""
+    points = {name: (c.get("lit_on_entry_rate"), c.get("savings_vs_always_on")) for name, c in controllers.items()}
+    points = {n: p for n, p in points.items() if p[0] is not None and p[1] is not None}
+    if not points:
+        return None
+    fig, ax = _axes(title)
+    order = list(points)
+    for name, (x, y) in points.items():
+        oracle = controllers[name].get("controller") == "oracle"
+        ax.scatter([x], [y], s=90 if oracle else 45, marker="*" if oracle else "o",
+                   color="black" if oracle else controller_color(name, order), label=name, zorder=3)  # fmt: skip
+        ax.annotate(name, (x, y), textcoords="offset points", xytext=(5, 4), fontsize=7)
+    return _finish(fig, ax, list(points.values()), path)
+
+
+def plot_sweep_frontier(rows: Sequence[Mapping[str, str]], path: Path) -> Path | None:
+    """One point per controller and sweep setting (results.csv rows with status ok)."""
+    by_controller: dict[str, list[tuple[float, float]]] = {}
+    for row in rows:
+        try:
+            x, y = float(row["lit_on_entry_rate"]), float(row["savings_vs_always_on"])
+        except (KeyError, TypeError, ValueError):
+            continue
+        if row.get("status", "ok") == "ok":
+            by_controller.setdefault(row["controller"], []).append((x, y))
+    if not by_controller:
+        return None
+    fig, ax = _axes("savings vs darkness, one point per sweep setting")
+    order = list(by_controller)
+    for name, pts in by_controller.items():
+        oracle = name == "oracle"
+        ax.scatter([p[0] for p in pts], [p[1] for p in pts], s=60 if oracle else 25, marker="*" if oracle else "o",
+                   color="black" if oracle else controller_color(name, order), alpha=0.8,
+                   label=f"{name} (n={len(pts)})", zorder=3)  # fmt: skip
+    return _finish(fig, ax, [p for pts in by_controller.values() for p in pts], path)

@@ -1,0 +1,56 @@
+"""The oracle bound and the planner's darkness figures, against hand computations."""
+
+import csv
+import io
+
+import pytest
+
+from citysim.config.scenario import ControllerSpec, scenario_from_mapping
+from citysim.sim.compare import resolve_controllers, with_savings_vs_oracle
+from citysim.sim.loop import run_controller
+from tests.citysim.test_sim import FPS, tiny_scenario
+
+
+def test_oracle_lights_from_one_ramp_before_entry_until_exit_plus_hold():
+    scenario = scenario_from_mapping(tiny_scenario())
+    objects = io.StringIO()
+    result = run_controller(scenario, ControllerSpec(name="oracle"), objects_writer=csv.writer(objects))
+    lum = scenario.lamps.luminaire
+    (row,) = list(csv.reader(io.StringIO(objects.getvalue())))
+    t_enter, t_exit, lag = float(row[4]), float(row[5]), float(row[6])
+    assert lag == 0.0 and row[8] == "1"  # lit on entry: nobody meets a dim lamp
+    assert result["lit_on_entry_rate"] == 1.0 and result["dark_s_per_100_entries"] == 0.0
+
+    # by hand: full from one ramp before entry (plus the oracle's two physics steps of margin)
+    # until exit plus the hold, a linear rise and fade, dim otherwise; sensing paid all night
+    rise_s = (1.0 - lum.dim_level) * lum.ramp_up_s
+    fall_s = (1.0 - lum.dim_level) * lum.fade_s
+    t_on = t_enter - rise_s - 2.0 / 30.0
+    t_off = t_exit + lum.hold_s
+    full_equiv_s = (t_off - t_on) - rise_s / 2 + fall_s / 2
+    T = scenario.duration_s
+    energy_hand_j = lum.rated_power_w * (lum.dim_level * T + (1 - lum.dim_level) * full_equiv_s) \
+        + (lum.standby_power_w + lum.sensing_power_w) * T
+    one_frame_j = lum.rated_power_w * (1 - lum.dim_level) / FPS
+    assert result["energy_kwh"] * 3.6e6 == pytest.approx(energy_hand_j, abs=one_frame_j)
+    trig = result["lamp_triggers"][0]
+    assert trig["first_s"] == pytest.approx(t_on, abs=1.0 / FPS)
+
+
+def test_every_comparison_holds_always_on_and_the_oracle_first():
+    scenario = scenario_from_mapping(tiny_scenario())
+    names = [s.name for s in resolve_controllers(scenario, ["pir", "detector"])]
+    assert names == ["always_on", "oracle", "pir", "detector"]
+
+
+def test_savings_vs_oracle_is_the_share_of_the_bound():
+    results = {
+        "always_on": {"controller": "always_on", "savings_vs_always_on": 0.0, "x": 1},
+        "oracle": {"controller": "oracle", "savings_vs_always_on": 0.5},
+        "pir": {"controller": "pir", "savings_vs_always_on": 0.45},
+    }
+    out = with_savings_vs_oracle(results)
+    assert out["pir"]["savings_vs_oracle"] == pytest.approx(0.9)
+    assert out["oracle"]["savings_vs_oracle"] == pytest.approx(1.0)
+    assert list(out["always_on"]) == ["controller", "savings_vs_always_on", "savings_vs_oracle", "x"]
+    assert with_savings_vs_oracle({"pir": results["pir"]})["pir"]["savings_vs_oracle"] is None
