@@ -221,6 +221,7 @@ def main(argv: list[str] | None = None) -> int:
         if argv and argv[0] == "train":
             return _train(_train_parser().parse_args(argv[1:]))
         args = _detect_parser().parse_args(argv)
+        check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
         summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
                                args.max_distance_m, progress=not args.no_progress)
     except USER_ERRORS as exc:
