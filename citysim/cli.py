@@ -53,10 +53,6 @@ def cmd_run(args) -> int:
     if updates:
         scenario = override(scenario, updates)
     names = [n.strip() for n in args.controllers.split(",") if n.strip()] if args.controllers else None
-    if names is not None:
-        from citysim.sim.compare import resolve_controllers
-
-        resolve_controllers(scenario, names)  # unknown names are refused before the out check
     check_output_dir(args.out, "citysim run", RUN_OUTPUTS)
     workers = args.workers or default_workers()
     summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=args.out, workers=workers,
