@@ -1,16 +1,27 @@
 """`citysim run | render | sweep | detect | plot`: the planner's command line.
 
-Errors a user can cause print one line naming the file or field and what is
-valid, and exit with code 2; nothing half-written is left behind.
+Errors a user can cause print one line naming the argument, file or field and
+what is valid, and exit with code 2; nothing half-written is left behind.
+Every number and the --out folder are checked before any simulation starts.
 """
 
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 from pathlib import Path
 
-USAGE_EXIT = 2
+from detector.cliargs import USAGE_EXIT, Parser, number
+from detector.outdir import OutputDirError, check_output_dir
+
+#: What each command's output folder holds ("plots/" a folder); an earlier one may be replaced
+#: (run, render) or resumed (sweep), a folder holding anything else is refused.
+RUN_OUTPUTS = ("summary.json", "objects.csv", "lamps.csv", "plots/", "report.html")
+RENDER_OUTPUTS = ("camera.mp4", "truth.csv", "topdown.png")
+SWEEP_OUTPUTS = ("sweep.json", "results.csv", "results.csv.tmp", "points/", "plots/", "report.html")
+#: The longest night a scenario may have (its duration_s limit), s.
+MAX_DURATION_S = 7 * 86400
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
@@ -19,7 +30,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     from detector.camera import CameraError
     from detector.video import VideoError
 
-    errors = [ScenarioError, RunError, CameraError, VideoError]
+    errors = [ScenarioError, RunError, CameraError, VideoError, OutputDirError]
     try:
         from citysim.sweep.runner import SweepError
 
@@ -30,8 +41,8 @@ def _user_errors() -> tuple[type[BaseException], ...]:
 
 
 def cmd_run(args) -> int:
-    from citysim.sim.compare import default_workers, run_comparison
     from citysim.config.scenario import load_scenario, override
+    from citysim.sim.compare import default_workers, run_comparison
 
     scenario = load_scenario(args.scenario)
     updates = {}
@@ -42,6 +53,7 @@ def cmd_run(args) -> int:
     if updates:
         scenario = override(scenario, updates)
     names = [n.strip() for n in args.controllers.split(",") if n.strip()] if args.controllers else None
+    check_output_dir(args.out, "citysim run", RUN_OUTPUTS)
     workers = args.workers or default_workers()
     summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=args.out, workers=workers,
                              scenario_file=str(args.scenario))
@@ -56,13 +68,14 @@ def cmd_run(args) -> int:
 
 
 def cmd_render(args) -> int:
-    from citysim.report.clip import render_clip
     from citysim.config.scenario import load_scenario
+    from citysim.report.clip import render_clip
 
     scenario = load_scenario(args.scenario)
-    stats = render_clip(scenario, args.lamp, args.duration, args.out, detect=args.detect, lamps_full=args.lamps_full,
-                        progress=not args.no_progress)
-    print(f"{stats['frames']} frames, {stats['truth_rows']} truth boxes"
+    check_output_dir(args.out, "citysim render", RENDER_OUTPUTS)
+    stats = render_clip(scenario, args.lamp, args.duration, args.out, start_s=args.start, detect=args.detect,
+                        lamps_full=args.lamps_full, progress=not args.no_progress)
+    print(f"{stats['frames']} frames from t = {args.start:g} s, {stats['truth_rows']} truth boxes"
           + (f", target detected in {stats['frames_with_target_detected']} frames" if args.detect else ""))
     print(f"results written to {args.out}/: camera.mp4, truth.csv, topdown.png")
     return 0
@@ -71,6 +84,7 @@ def cmd_render(args) -> int:
 def cmd_sweep(args) -> int:
     from citysim.sweep.runner import run_sweep
 
+    check_output_dir(args.out, "citysim sweep", SWEEP_OUTPUTS)  # an earlier folder of this sweep resumes
     counts = run_sweep(args.sweep, args.out, scheduler=args.scheduler, workers=args.workers,
                        progress=not args.no_progress)
     print(f"{counts['points']} points: {counts['ran']} ran ({counts['ok']} ok, {counts['failed']} failed), "
@@ -100,54 +114,103 @@ def cmd_plot(args) -> int:
 def cmd_detect(args) -> int:
     from detector.__main__ import main as detector_main
 
-    argv = [str(args.video), "--camera", str(args.camera), "--out", str(args.out)]
+    argv = [str(args.video), "--camera", str(args.camera), "--out", str(args.out), "--max-width", str(args.max_width),
+            "--max-distance-m", str(args.max_distance_m)]
+    if args.no_progress:
+        argv.append("--no-progress")
     if args.model:
         argv += ["--model", str(args.model)]
     return detector_main(argv)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="citysim", description="Street-lighting scenarios with camera-driven lamps.")
-    sub = p.add_subparsers(dest="command", required=True)
+def controller_list() -> str:
+    """The registered controllers, one line each (for ``citysim run --help``)."""
+    from citysim.control.registry import CONTROLLERS
 
-    r = sub.add_parser("run", help="compare controllers on one scenario's night")
-    r.add_argument("scenario", type=Path)
-    r.add_argument("--out", type=Path, required=True)
-    r.add_argument("--controllers", help="comma-separated names (default: the scenario's list)")
-    r.add_argument("--duration", type=float, help="simulated seconds (default: the scenario's)")
-    r.add_argument("--seed", type=int)
-    r.add_argument("--workers", type=int, default=None, help="parallel processes (default: up to 2)")
-    r.add_argument("--no-progress", action="store_true")
+    lines = ["controllers (--controllers, or the scenario's `controllers` list):"]
+    for name, cls in CONTROLLERS.items():
+        doc = (inspect.getdoc(cls) or "").splitlines()[0]
+        fraction = getattr(cls, "fraction", None)
+        if fraction is not None:  # the threshold baselines differ only in it
+            doc = f"{doc.rstrip('.')}: {fraction:.1%}"
+        lines.append(f"  {name:<19} {doc}")
+    return "\n".join(lines)
+
+
+def _add_run(sub) -> None:
+    r = sub.add_parser("run", help="compare controllers on one scenario's night", epilog_fn=controller_list,
+                       description="Simulate the scenario's night once per controller, on the same traffic, and "
+                                   "write a run folder: summary.json, objects.csv, lamps.csv, plots/.")
+    r.add_argument("scenario", type=Path, help="scenario YAML file (see scenarios/suburban_night.yaml)")
+    r.add_argument("--out", type=Path, required=True,
+                   help="run folder to write: new, empty, or an earlier run folder (replaced)")
+    r.add_argument("--controllers", help="comma-separated controller names, listed below; always_on is added "
+                                         "for the savings (default: the scenario's list)")
+    r.add_argument("--duration", type=number(float, gt=0, le=MAX_DURATION_S, unit="s"),
+                   help="simulated seconds (default: the scenario's duration_s)")
+    r.add_argument("--seed", type=number(int, ge=0),
+                   help="random seed of the traffic, scenery and sensor noise (default: the scenario's seed)")
+    r.add_argument("--workers", type=number(int, ge=1), default=None,
+                   help="parallel processes, one controller each (default: 2, or 1 on a one-core machine)")
+    r.add_argument("--no-progress", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
 
-    rd = sub.add_parser("render", help="render one lamp camera's view with ground truth")
-    rd.add_argument("scenario", type=Path)
-    rd.add_argument("--lamp", type=int, default=0)
-    rd.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
-    rd.add_argument("--out", type=Path, required=True)
-    rd.add_argument("--detect", action="store_true", help="run the detector and draw its boxes")
-    rd.add_argument("--lamps-full", action="store_true", help="render with every lamp at full level")
-    rd.add_argument("--no-progress", action="store_true")
+
+def _add_render(sub) -> None:
+    rd = sub.add_parser("render", help="render one lamp camera's view with ground truth",
+                        description="Render one lamp camera's view of the scenario's night: camera.mp4 (truth "
+                                    "boxes; with --detect the detector's boxes in a second half beside them), "
+                                    "truth.csv and topdown.png.")
+    rd.add_argument("scenario", type=Path, help="scenario YAML file")
+    rd.add_argument("--lamp", type=number(int, ge=0), default=0, help="lamp index, 0 .. the scenario's lamps - 1")
+    rd.add_argument("--start", type=number(float, ge=0, unit="s"), default=0.0,
+                    help="seconds into the night the clip starts (within the scenario's duration_s)")
+    rd.add_argument("--duration", type=number(float, gt=0, le=MAX_DURATION_S, unit="s"), default=20.0,
+                    help="clip length, simulated seconds")
+    rd.add_argument("--out", type=Path, required=True,
+                    help="folder to write: new, empty, or an earlier render folder (replaced)")
+    rd.add_argument("--detect", action="store_true", help="run the detector and show its boxes beside the truth")
+    rd.add_argument("--lamps-full", action="store_true", help="render with every lamp at full level "
+                                                                "(default: at the luminaire's dim_level)")
+    rd.add_argument("--no-progress", action="store_true", help="no progress bar")
     rd.set_defaults(func=cmd_render)
 
-    s = sub.add_parser("sweep", help="run a parameter sweep on Dask")
-    s.add_argument("sweep", type=Path)
-    s.add_argument("--out", type=Path, required=True)
-    s.add_argument("--scheduler", help="Dask scheduler address (default: a local cluster)")
-    s.add_argument("--workers", type=int, default=None)
-    s.add_argument("--no-progress", action="store_true")
+
+def build_parser() -> argparse.ArgumentParser:
+    p = Parser(prog="citysim", description="Street-lighting scenarios with camera-driven lamps. "
+                                           "'citysim COMMAND --help' describes each command.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser, metavar="COMMAND")
+    _add_run(sub)
+    _add_render(sub)
+
+    s = sub.add_parser("sweep", help="run a parameter sweep on Dask",
+                       description="Run every point of a sweep file; a folder of the same sweep resumes.")
+    s.add_argument("sweep", type=Path, help="sweep YAML file (see experiments/sweeps/)")
+    s.add_argument("--out", type=Path, required=True,
+                   help="sweep folder: new, empty, or an earlier folder of this sweep (resumed)")
+    s.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://HOST:8786 (default: a local cluster)")
+    s.add_argument("--workers", type=number(int, ge=1), default=None,
+                   help="local cluster processes (default: one per CPU)")
+    s.add_argument("--no-progress", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_sweep)
 
-    d = sub.add_parser("detect", help="run the detector on a real video (same as python -m detector)")
-    d.add_argument("video", type=Path)
-    d.add_argument("--camera", type=Path, required=True)
-    d.add_argument("--out", type=Path, required=True)
-    d.add_argument("--model", type=Path)
+    d = sub.add_parser("detect", help="run the detector on a real video (same as python -m detector)",
+                       description="Run the detector on a real video (same as python -m detector).")
+    d.add_argument("video", type=Path, help="video file (any format OpenCV decodes)")
+    d.add_argument("--camera", type=Path, required=True, help="camera YAML (see scenarios/cameras/)")
+    d.add_argument("--out", type=Path, required=True,
+                   help="folder for detections.csv, annotated.mp4, summary.json: new, empty, or an earlier one")
+    d.add_argument("--model", type=Path, help="classifier .joblib (default: the general model)")
+    d.add_argument("--max-width", type=number(int, ge=64, unit="px"), default=424,
+                   help="process frames scaled down to at most this width, px (boxes stay in the video's pixels)")
+    d.add_argument("--max-distance-m", type=number(float, gt=0, unit="m"), default=25.0,
+                   help="ignore objects farther than this, m")
+    d.add_argument("--no-progress", action="store_true", help="no progress bar")
     d.set_defaults(func=cmd_detect)
 
-
-    pl = sub.add_parser("plot", help="plots and report.html for a run or sweep folder")
-    pl.add_argument("dir", type=Path)
+    pl = sub.add_parser("plot", help="plots and report.html for a run or sweep folder",
+                        description="Draw the plots and report.html of a run or sweep folder.")
+    pl.add_argument("dir", type=Path, help="a run folder (summary.json) or sweep folder (results.csv)")
     pl.set_defaults(func=cmd_plot)
     return p
 

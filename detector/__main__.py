@@ -3,15 +3,18 @@
     python -m detector VIDEO --camera CAM.yaml --out DIR [--model M.joblib] [--max-width 424]
     python -m detector train --camera CAM.yaml --out MODEL.joblib [--seed 0]
 
-Writes DIR/detections.csv (one row per classified region, noise included) and
-DIR/annotated.mp4. User errors print one line naming the file or field and exit
-with code 2; nothing half-written is left behind.
+Writes DIR/detections.csv (one row per classified region, noise included; boxes in the
+video's own pixels), DIR/annotated.mp4 (the video at its own size with the boxes drawn) and
+DIR/summary.json (counts, and the size the frames were processed at). User errors print one
+line naming the argument, file or field and exit with code 2; nothing half-written is left
+behind, and an --out that cannot or should not be written is refused before any frame.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import json
 import math
 import sys
 from pathlib import Path
@@ -21,11 +24,25 @@ from tqdm import tqdm
 
 from detector.camera import CameraError, CameraModel
 from detector.classes import GENERAL_CAMERA_HEIGHT_M, GENERAL_MIN_VIEW_RANGE_M, GENERAL_TILT_DEG
-from detector.outdir import staged_output
-from detector.video import VideoError, camera_for_video, gray_frames, probe_video
+from detector.cliargs import USAGE_EXIT, Parser, number
+from detector.outdir import check_output_dir, check_output_file, staged_output
+from detector.video import (
+    FrameScale,
+    VideoError,
+    camera_for_video,
+    frame_scale,
+    probe_video,
+    source_and_gray_frames,
+)
 
 CSV_HEADER = ["frame", "x", "y", "w", "h", "cls", "p_target", "width_m", "height_m", "area_m2", "distance_m"]
+#: What an output folder of this command holds; an earlier one may be replaced by a new run.
+DETECT_OUTPUTS = ("detections.csv", "annotated.mp4", "summary.json")
 USER_ERRORS = (CameraError, VideoError, FileNotFoundError, ValueError)
+MIN_MAX_WIDTH_PX = 64
+#: Training a model for one camera takes about this long on one core of a small machine, s
+#: (5 classes x DEFAULT_N_PER_CLASS synthetic silhouettes and a logistic regression).
+CAMERA_TRAINING_S = 7
 # the general model's cameras in words ("2-10 m high", "0-80 deg tilt")
 _GENERAL_HEIGHTS = "{:g}-{:g} m high".format(*GENERAL_CAMERA_HEIGHT_M)
 _GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
@@ -33,58 +50,83 @@ _GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
 
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
                  max_width_px: int = 424, max_distance_m: float = 25.0, progress: bool = True) -> dict:
-    """Run the detector over a video; returns a small summary dict (also printed by the CLI)."""
-    from detector.classifier import DimensionalClassifier
-    from detector.detector import Detector
-    from detector.draw import draw_detections
-    from detector.general_model import default_model
+    """Run the detector over a video and write ``out_dir``; returns the summary (also in summary.json).
 
+    Frames wider than ``max_width_px`` are processed scaled down; every box written or drawn
+    is in the video's own pixels (``summary["processing"]`` states the scale).
+    """
+    from detector.detector import Detector
+
+    if not max_width_px >= MIN_MAX_WIDTH_PX:
+        raise ValueError(f"max_width_px: must be >= {MIN_MAX_WIDTH_PX} px, got {max_width_px}")
+    if not max_distance_m > 0:
+        raise ValueError(f"max_distance_m: must be > 0 m, got {max_distance_m}")
+    check_output_dir(out_dir, "python -m detector", DETECT_OUTPUTS)
     camera = CameraModel.from_yaml(camera_file)
     info = probe_video(video)
     cam = camera_for_video(camera, info, max_width_px, camera_source=str(camera_file))
-    if model_path:
-        model = DimensionalClassifier.load(model_path)
-    elif general_model_covers(cam):
-        model = default_model()
-    else:
-        # a steep or low camera that never sees 25 m ahead lies outside what the general model was
-        # trained on; a model for this very camera is a few seconds away and clearly better there
-        print(f"note: {camera_file} sees only {view_range_m(cam):.1f} m ahead, outside the general model's "
-              f"cameras ({_GENERAL_HEIGHTS}, seeing >= {GENERAL_MIN_VIEW_RANGE_M:g} m); training a model for this camera "
-              f"(save one with 'python -m detector train' to skip this)", file=sys.stderr)
-        # the training code loads only here, for a camera the general model does not cover
-        from detector.train.fit import train_camera_model
-
-        model = train_camera_model(cam)
+    scale = frame_scale(info, max_width_px)
+    model, model_name = _choose_model(cam, camera_file, model_path)
     detector = Detector(cam, model=model, max_distance_m=max_distance_m)
-    size = (cam.width_px, cam.height_px)
-    counts: dict[str, int] = {}
-    frames_with_target = 0
-    n_frames = 0
+    summary = {"video": str(video), "camera": str(camera_file), "model": model_name,
+               "boxes": "x, y, w, h in the video's own pixels (OpenCV boundingRect: columns x .. x+w-1)",
+               "processing": scale.as_dict(), "max_distance_m": max_distance_m, "fps": info.fps}
     with staged_output(out_dir) as stage:
-        writer = cv2.VideoWriter(str(stage / "annotated.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), info.fps, size)
-        if not writer.isOpened():
-            raise VideoError(f"{out_dir / 'annotated.mp4'}: OpenCV cannot write an mp4 video here")
-        try:
-            with open(stage / "detections.csv", "w", newline="") as fh:
-                rows = csv.writer(fh)
-                rows.writerow(CSV_HEADER)
-                bar = tqdm(gray_frames(info, size), total=info.frame_count or None, unit="frame",
-                           desc=f"detect {video.name}", disable=not progress)
-                for n_frames, gray in enumerate(bar, start=1):
-                    detections = detector.process(gray)
-                    for det in detections:
-                        x, y, w, h = det.box_px
-                        wm, hm, am, dm = det.features[:4]
-                        rows.writerow([n_frames - 1, x, y, w, h, det.cls, f"{det.p_target:.4f}",
-                                       f"{wm:.3f}", f"{hm:.3f}", f"{am:.3f}", f"{dm:.3f}"])
-                        counts[det.cls] = counts.get(det.cls, 0) + 1
-                    frames_with_target += detector.is_target(detections)
-                    writer.write(draw_detections(gray, detections))
-        finally:
-            writer.release()
-    return {"frames": n_frames, "frames_with_target": frames_with_target, "regions_per_class": counts,
-            "processing_size_px": size, "out_dir": str(out_dir)}
+        counts = _detect_frames(detector, info, scale, stage, progress)
+        summary.update(counts)
+        (stage / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return {**summary, "processing_size_px": scale.processing_px, "video_size_px": scale.source_px,
+            "out_dir": str(out_dir)}
+
+
+def _choose_model(cam: CameraModel, camera_file: Path, model_path: Path | None):
+    """The classifier for this camera and how to name it in the summary."""
+    from detector.classifier import DimensionalClassifier
+    from detector.general_model import default_model
+
+    if model_path:
+        return DimensionalClassifier.load(model_path), str(model_path)
+    gap = general_model_gap(cam)
+    if gap is None:
+        return default_model(), "general"
+    # a camera unlike those the general model was trained on: a model for this very camera is
+    # a few seconds away and clearly better there
+    print(f"note: {camera_file}: {gap}; training a model for this camera (~{CAMERA_TRAINING_S} s on an idle machine; "
+          "save one with 'python -m detector train' to skip this)", file=sys.stderr)
+    # the training code loads only here, for a camera the general model does not cover
+    from detector.train.fit import train_camera_model
+
+    return train_camera_model(cam), f"trained for {camera_file} (seed 0)"
+
+
+def _detect_frames(detector, info, scale: FrameScale, stage: Path, progress: bool) -> dict:
+    """Detect in every frame: detections.csv and annotated.mp4 (at the video's size) into ``stage``."""
+    from detector.draw import draw_detections
+
+    counts: dict[str, int] = {}
+    frames_with_target = n_frames = 0
+    writer = cv2.VideoWriter(str(stage / "annotated.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), info.fps, scale.source_px)
+    if not writer.isOpened():
+        raise VideoError(f"{stage.parent}: OpenCV cannot write an mp4 video here")
+    try:
+        with open(stage / "detections.csv", "w", newline="") as fh:
+            rows = csv.writer(fh)
+            rows.writerow(CSV_HEADER)
+            bar = tqdm(source_and_gray_frames(info, scale.processing_px), total=info.frame_count or None,
+                       unit="frame", desc=f"detect {info.path.name}", disable=not progress)
+            for n_frames, (source, gray) in enumerate(bar, start=1):
+                detections = detector.process(gray)
+                boxes = [scale.to_source_box(det.box_px) for det in detections]
+                for det, (x, y, w, h) in zip(detections, boxes, strict=True):
+                    wm, hm, am, dm = det.features[:4]
+                    rows.writerow([n_frames - 1, x, y, w, h, det.cls, f"{det.p_target:.4f}",
+                                   f"{wm:.3f}", f"{hm:.3f}", f"{am:.3f}", f"{dm:.3f}"])
+                    counts[det.cls] = counts.get(det.cls, 0) + 1
+                frames_with_target += detector.is_target(detections)
+                writer.write(draw_detections(source, detections, boxes_px=boxes))
+    finally:
+        writer.release()
+    return {"frames": n_frames, "frames_with_target": frames_with_target, "regions_per_class": counts}
 
 
 def view_range_m(camera: CameraModel) -> float:
@@ -95,13 +137,28 @@ def view_range_m(camera: CameraModel) -> float:
     return camera.height_m / math.tan(math.radians(top_depression_deg))
 
 
+def general_model_gap(camera: CameraModel) -> str | None:
+    """Why the general model does not cover ``camera``, in words (None if it does): outside the
+    ``detector.classes`` ``GENERAL_*`` ranges that its TrainingConfig defaults to."""
+    reasons = []
+    lo_h, hi_h = GENERAL_CAMERA_HEIGHT_M
+    if not lo_h <= camera.height_m <= hi_h:
+        reasons.append(f"camera {camera.height_m:g} m high: the general model covers {lo_h:g}-{hi_h:g} m")
+    lo_t, hi_t = GENERAL_TILT_DEG
+    if not lo_t <= camera.tilt_deg <= hi_t:
+        reasons.append(f"camera tilted {camera.tilt_deg:g} deg below the horizon: the general model covers "
+                       f"{lo_t:g}-{hi_t:g} deg")
+    view_m = view_range_m(camera)
+    if view_m < GENERAL_MIN_VIEW_RANGE_M:
+        reasons.append(f"camera sees the ground only {view_m:.1f} m ahead: the general model's cameras see "
+                       f"at least {GENERAL_MIN_VIEW_RANGE_M:g} m")
+    return "; ".join(reasons) or None
+
+
 def general_model_covers(camera: CameraModel) -> bool:
     """Is the camera like those the general model was trained on (``detector.classes``' ``GENERAL_*``
     ranges, which the general model's TrainingConfig defaults to)?"""
-    lo_h, hi_h = GENERAL_CAMERA_HEIGHT_M
-    lo_t, hi_t = GENERAL_TILT_DEG
-    return (lo_h <= camera.height_m <= hi_h and lo_t <= camera.tilt_deg <= hi_t
-            and view_range_m(camera) >= GENERAL_MIN_VIEW_RANGE_M)
+    return general_model_gap(camera) is None
 
 
 def train_camera(camera_file: Path | None, out_path: Path, seed: int = 0) -> Path:
@@ -122,28 +179,39 @@ def train_camera(camera_file: Path | None, out_path: Path, seed: int = 0) -> Pat
     return out_path
 
 
+USAGE = """python -m detector VIDEO --camera CAM.yaml --out DIR [options]
+       python -m detector train [--camera CAM.yaml] --out MODEL.joblib [--seed N]"""
+
+
 def _detect_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m detector", description="Detect and classify moving objects in a video "
-                                "(pedestrian, group, cyclist, vehicle, noise). Use 'python -m detector train' to "
-                                "train a model for one camera.")
+    p = Parser(prog="python -m detector", usage=USAGE, description="Detect and classify moving objects in a "
+               "video (pedestrian, group, cyclist, vehicle, noise). 'python -m detector train --help' trains "
+               "a model for one camera.")
     p.add_argument("video", type=Path, help="video file (any format OpenCV decodes)")
-    p.add_argument("--camera", type=Path, required=True, help="camera YAML (see scenarios/cameras/)")
-    p.add_argument("--out", type=Path, required=True, help="output folder for detections.csv and annotated.mp4")
-    p.add_argument("--model", type=Path, default=None, help="classifier .joblib (default: the general model)")
-    p.add_argument("--max-width", type=int, default=424, help="process frames scaled to at most this width, px")
-    p.add_argument("--max-distance-m", type=float, default=25.0, help="ignore objects farther than this, m")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--camera", type=Path, required=True, help="camera YAML: CameraModel fields (see scenarios/cameras/)")
+    p.add_argument("--out", type=Path, required=True,
+                   help="output folder for detections.csv, annotated.mp4 and summary.json: new, empty, or an "
+                        "earlier output of this command (replaced)")
+    p.add_argument("--model", type=Path, default=None,
+                   help="classifier .joblib (default: the general model, or one trained on the spot for a "
+                        "camera outside its range)")
+    p.add_argument("--max-width", type=number(int, ge=MIN_MAX_WIDTH_PX, unit="px"), default=424,
+                   help="process frames scaled down to at most this width, px (boxes are written in the "
+                        "video's own pixels)")
+    p.add_argument("--max-distance-m", type=number(float, gt=0, unit="m"), default=25.0,
+                   help="ignore objects farther than this, m")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p
 
 
 def _train_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m detector train", description="Train a classifier "
-                                "specialised to one camera, or without --camera the general model "
-                                "(the shipped detector/models/general.joblib is seed 0).")
+    p = Parser(prog="python -m detector train", description="Train a classifier "
+               "specialised to one camera, or without --camera the general model "
+               "(the shipped detector/models/general.joblib is seed 0).")
     p.add_argument("--camera", type=Path, default=None,
                    help="camera YAML to specialise to (default: none, the general model)")
     p.add_argument("--out", type=Path, required=True, help="model file to write (.joblib)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=number(int, ge=0), default=0, help="random seed of the synthetic training set")
     return p
 
 
@@ -151,32 +219,37 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         if argv and argv[0] == "train":
-            args = _train_parser().parse_args(argv[1:])
-            from detector.train.sets import UnseenKindError
-
-            try:
-                path = train_camera(args.camera, args.out, seed=args.seed)
-            except UnseenKindError as exc:
-                raise CameraError(
-                    f"{args.camera}: this camera never sees a whole {exc.kind} in its frame "
-                    f"({exc.seen} of {exc.attempts} tries), so no model can be trained for it; "
-                    "check its height_m, tilt_deg and field of view"
-                ) from None
-            print(f"model written to {path}")
-            return 0
+            return _train(_train_parser().parse_args(argv[1:]))
         args = _detect_parser().parse_args(argv)
-        if args.max_width < 64:
-            raise ValueError(f"--max-width must be >= 64 px, got {args.max_width}")
-        if args.max_distance_m <= 0:
-            raise ValueError(f"--max-distance-m must be > 0, got {args.max_distance_m}")
+        check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
         summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
                                args.max_distance_m, progress=not args.no_progress)
     except USER_ERRORS as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2
-    print(f"{summary['frames']} frames at {summary['processing_size_px'][0]}x{summary['processing_size_px'][1]} px; "
-          f"target in {summary['frames_with_target']} frames; regions per class {summary['regions_per_class']}")
-    print(f"results written to {args.out}/detections.csv and {args.out}/annotated.mp4")
+        return USAGE_EXIT
+    proc = summary["processing"]
+    scaled = (f"processed at {proc['processing_width_px']}x{proc['processing_height_px']} px "
+              f"(x{1 / proc['source_px_per_processing_px_x']:.3f}); boxes in the video's "
+              f"{proc['video_width_px']}x{proc['video_height_px']} px")
+    print(f"{summary['frames']} frames {scaled}; target in {summary['frames_with_target']} frames; "
+          f"regions per class {summary['regions_per_class']}")
+    print(f"results written to {args.out}/: detections.csv, annotated.mp4, summary.json")
+    return 0
+
+
+def _train(args: argparse.Namespace) -> int:
+    from detector.train.sets import UnseenKindError
+
+    check_output_file(args.out)
+    try:
+        path = train_camera(args.camera, args.out, seed=args.seed)
+    except UnseenKindError as exc:
+        raise CameraError(
+            f"{args.camera}: this camera never sees a whole {exc.kind} in its frame "
+            f"({exc.seen} of {exc.attempts} tries), so no model can be trained for it; "
+            "check its height_m, tilt_deg and field of view"
+        ) from None
+    print(f"model written to {path}")
     return 0
 
 

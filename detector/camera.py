@@ -25,9 +25,14 @@ Conventions (see DESIGN.md):
 
 from __future__ import annotations
 
+import difflib
 import math
+import types
+import typing
+from collections.abc import Sequence
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -265,15 +270,69 @@ class CameraModel(BaseModel):
         return np.column_stack([rel @ h, rel @ np.array([-h[1], h[0]])])
 
 
-def format_validation_error(exc: ValidationError) -> str:
-    """One line per bad field: dotted path, what was wrong, the value got."""
+def format_validation_error(exc: ValidationError, model: type[BaseModel] | None = None) -> str:
+    """One line per bad field: dotted path, what was wrong, the value got.
+
+    An unknown field is told the nearest valid names of the model at its place, found from
+    ``model`` (the validated model class; default ``CameraModel`` for its own errors) or
+    from a ``valid_fields`` list in the error's context.
+    """
+    if model is None and exc.title == CameraModel.__name__:
+        model = CameraModel
     lines = []
     for err in exc.errors():
         loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
         msg = err["msg"].removeprefix("Value error, ")
         if err["type"] == "extra_forbidden":
-            msg = "unknown field"
+            valid = (err.get("ctx") or {}).get("valid_fields") or _field_names_at(model, tuple(err["loc"][:-1]))
+            msg = "unknown field" + _nearest_names(str(err["loc"][-1]) if err["loc"] else "", valid)
         got = err.get("input")
         got_txt = "" if err["type"] in ("missing", "extra_forbidden") or isinstance(got, dict) else f" (got {got!r})"
         lines.append(f"{loc}: {msg}{got_txt}")
     return "; ".join(lines)
+
+
+def _nearest_names(name: str, valid: Sequence[str]) -> str:
+    """'; did you mean x?' for a near miss, else '; valid: a, b, c' (empty without names)."""
+    if not valid:
+        return ""
+    near = difflib.get_close_matches(name, list(valid), n=2, cutoff=0.6)
+    if near:
+        return f"; did you mean {' or '.join(near)}?"
+    return f"; valid: {', '.join(valid)}"
+
+
+def _field_names_at(model: type[BaseModel] | None, path: tuple) -> list[str]:
+    """The field names of the model(s) at ``path`` (a pydantic error location) below ``model``."""
+    if model is None:
+        return []
+    nodes: list[Any] = [model]
+    for key in path:
+        below: list[Any] = []
+        for node in (leaf for n in nodes for leaf in _leaf_types(n)):
+            origin = typing.get_origin(node)
+            if isinstance(node, type) and issubclass(node, BaseModel):
+                if key in node.model_fields:
+                    below.append(node.model_fields[key].annotation)
+                elif key == node.__name__:  # pydantic tags a union member with its class name
+                    below.append(node)
+            elif origin in (tuple, list, set, frozenset) and isinstance(key, int):
+                below.extend(a for a in typing.get_args(node) if a is not Ellipsis)
+            elif origin is dict:
+                below.append(typing.get_args(node)[1])
+        nodes = below
+    names: list[str] = []
+    for node in (leaf for n in nodes for leaf in _leaf_types(n)):
+        if isinstance(node, type) and issubclass(node, BaseModel):
+            names.extend(f for f in node.model_fields if f not in names)
+    return names
+
+
+def _leaf_types(annotation: Any) -> list[Any]:
+    """The alternatives of an Optional/Union/Annotated annotation (itself otherwise)."""
+    origin = typing.get_origin(annotation)
+    if origin in (typing.Union, types.UnionType):
+        return [leaf for a in typing.get_args(annotation) for leaf in _leaf_types(a)]
+    if origin is typing.Annotated:
+        return _leaf_types(typing.get_args(annotation)[0])
+    return [annotation]

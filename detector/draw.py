@@ -17,18 +17,28 @@ CLASS_COLOURS_BGR = {
 }
 
 
-def draw_detections(gray: np.ndarray, detections: Sequence, show_noise: bool = True) -> np.ndarray:
-    """A BGR copy of ``gray`` with each detection's box and 'class p_target distance' label."""
-    img = cv2.cvtColor(gray, cv2.COLOR_GRAY2BGR)
-    for det in detections:
+def draw_detections(image: np.ndarray, detections: Sequence, show_noise: bool = True,
+                    boxes_px: Sequence[tuple[int, int, int, int]] | None = None) -> np.ndarray:
+    """A BGR copy of ``image`` (gray or BGR) with each detection's box and 'class p_target distance' label.
+
+    ``boxes_px``: the boxes to draw, one per detection, when ``image`` is not the frame the
+    detector saw (e.g. the source video, with ``detector.video.FrameScale.to_source_box``);
+    default each detection's own ``box_px``.
+    """
+    img = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR) if image.ndim == 2 else image.copy()
+    # lines and labels grow with the frame, so they read the same on a 1080p video as at 320 px
+    size = max(1, round(img.shape[1] / 424))
+    boxes = [det.box_px for det in detections] if boxes_px is None else boxes_px
+    for det, box in zip(detections, boxes, strict=True):
         if det.cls == "noise" and not show_noise:
             continue
-        x, y, w, h = (int(v) for v in det.box_px)
+        x, y, w, h = (int(v) for v in box)
         colour = CLASS_COLOURS_BGR.get(det.cls, (255, 255, 255))
-        thick = 1 if det.cls == "noise" else 2
+        thick = size if det.cls == "noise" else 2 * size
         cv2.rectangle(img, (x, y), (x + w - 1, y + h - 1), colour, thick)
         label = f"{det.cls} {det.p_target:.2f} {det.features[3]:.0f}m"
-        cv2.putText(img, label, (x, max(8, y - 3)), cv2.FONT_HERSHEY_SIMPLEX, 0.3, colour, 1, cv2.LINE_AA)
+        cv2.putText(img, label, (x, max(8 * size, y - 3 * size)), cv2.FONT_HERSHEY_SIMPLEX, 0.3 * size, colour, size,
+                    cv2.LINE_AA)
     return img
 
 

@@ -1,29 +1,84 @@
-"""Write a results folder all at once: nothing half-written is ever left behind.
+"""Results folders: checked before any work, written all at once.
 
-Files are written into a hidden staging folder beside the destination and
-moved into place only when the whole job succeeded; on any error the staging
-folder is removed and the destination is left as it was.
+``check_output_dir`` refuses, before a job starts, an output folder it could not or should not
+write: an existing file, a place the user cannot write to, or a folder holding anything but an
+earlier output of the same kind (which the job may replace). ``staged_output`` writes files
+into a hidden staging folder beside the destination and moves them into place only when the
+whole job succeeded; on any error the staging folder, and any parent folder it had to create,
+is removed and the destination is left as it was.
 """
 
 from __future__ import annotations
 
 import shutil
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+
+
+class OutputDirError(ValueError):
+    """An output folder that cannot be used; the message names the argument and what is valid."""
+
+
+def check_output_dir(out_dir: str | Path, kind: str, names: Sequence[str], arg: str = "--out") -> None:
+    """Raise OutputDirError unless ``out_dir`` is new, empty or an earlier ``kind`` output.
+
+    ``names``: the files and folders a ``kind`` output holds (a folder written "plots/"); a
+    folder holding only these is an earlier output the job may replace. Creates nothing.
+    """
+    out = Path(out_dir)
+    valid = f"valid: a new or empty folder, or an earlier {kind} folder ({', '.join(names)})"
+    if out.exists() and not out.is_dir():
+        raise OutputDirError(f"{arg}: {out} is a file, not a folder; {valid}")
+    if out.is_dir():
+        own = {n.rstrip("/") for n in names}
+        foreign = sorted(p.name + ("/" if p.is_dir() else "") for p in out.iterdir() if p.name not in own)
+        if foreign:
+            shown = ", ".join(foreign[:4]) + (f" and {len(foreign) - 4} more" if len(foreign) > 4 else "")
+            raise OutputDirError(f"{arg}: {out} holds files that are not from a {kind} ({shown}); {valid}")
+    _check_writable(out, arg)
+
+
+def check_output_file(path: str | Path, arg: str = "--out") -> None:
+    """Raise OutputDirError unless a file can be written at ``path`` (new, or replacing a file)."""
+    path = Path(path)
+    if path.is_dir():
+        raise OutputDirError(f"{arg}: {path} is a folder; valid: a file path, e.g. {path / 'model.joblib'}")
+    _check_writable(path.parent, arg)
+
+
+def _check_writable(out: Path, arg: str) -> None:
+    """Can a folder be made in ``out`` (if it exists) or in its nearest existing ancestor?"""
+    place = out.absolute()
+    while not place.exists():
+        place = place.parent
+    if not place.is_dir():
+        raise OutputDirError(f"{arg}: {out} cannot be created: {place} is a file; valid: a path of folders")
+    # try it rather than trust permission bits: root ignores them, a read-only mount does not
+    try:
+        Path(tempfile.mkdtemp(prefix=".write-check-", dir=place)).rmdir()
+    except OSError as exc:
+        raise OutputDirError(f"{arg}: cannot write in {place} ({exc.strerror or exc}); "
+                             "valid: a folder you can write to") from None
 
 
 @contextmanager
 def staged_output(out_dir: str | Path) -> Iterator[Path]:
     """Yield a staging folder; on success move its files into ``out_dir``."""
     out = Path(out_dir)
+    made = [p for p in (out.parent, *out.parent.parents) if not p.exists()]  # deepest first
     out.parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
         yield stage
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
+        for folder in made:  # the parents this job created, if still empty
+            try:
+                folder.rmdir()
+            except OSError:
+                break
         raise
     out.mkdir(parents=True, exist_ok=True)
     for item in stage.iterdir():

@@ -3,7 +3,9 @@
 A lamp's board processes small frames (the paper uses 320x240 to 424x240); a
 larger video is scaled down to ``max_width_px`` and the camera's pixel grid with
 it. The camera's intrinsics are in millimetres, so a new ``width_px`` /
-``height_px`` rescales fx, fy and the principal point exactly.
+``height_px`` rescales fx, fy and the principal point exactly. ``FrameScale``
+maps the boxes found at the processing size back to the video's own pixels,
+which is what a user sees and measures.
 """
 
 from __future__ import annotations
@@ -77,6 +79,44 @@ def processing_size(width_px: int, height_px: int, max_width_px: int) -> tuple[i
     return max_width_px, max(16, round(height_px * scale))
 
 
+@dataclass(frozen=True)
+class FrameScale:
+    """The video's size and the size the detector processes it at, px (width, height)."""
+
+    source_px: tuple[int, int]
+    processing_px: tuple[int, int]
+
+    @property
+    def factor_xy(self) -> tuple[float, float]:
+        """Source pixels per processing pixel, along x and y (1.0 when not scaled)."""
+        return self.source_px[0] / self.processing_px[0], self.source_px[1] / self.processing_px[1]
+
+    def to_source_box(self, box_px: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
+        """A processing-size box (x, y, w, h; OpenCV boundingRect: columns x .. x+w-1) in source pixels.
+
+        Pixel edges scale exactly (processing column i covers source edges i*f .. (i+1)*f); the
+        scaled edges are rounded to the nearest source pixel edge, so the error is at most half
+        a source pixel beyond what the processing resolution itself loses.
+        """
+        fx, fy = self.factor_xy
+        x, y, w, h = box_px
+        x0, y0 = round(x * fx), round(y * fy)
+        x1, y1 = round((x + w) * fx), round((y + h) * fy)
+        return x0, y0, max(1, x1 - x0), max(1, y1 - y0)
+
+    def as_dict(self) -> dict:
+        """For summary.json: sizes and factors, stated so a reader can convert either way."""
+        fx, fy = self.factor_xy
+        return {"video_width_px": self.source_px[0], "video_height_px": self.source_px[1],
+                "processing_width_px": self.processing_px[0], "processing_height_px": self.processing_px[1],
+                "source_px_per_processing_px_x": round(fx, 6), "source_px_per_processing_px_y": round(fy, 6)}
+
+
+def frame_scale(info: VideoInfo, max_width_px: int) -> FrameScale:
+    """How ``info``'s frames are scaled for processing at most ``max_width_px`` wide."""
+    return FrameScale((info.width_px, info.height_px), processing_size(info.width_px, info.height_px, max_width_px))
+
+
 def camera_for_video(camera: CameraModel, info: VideoInfo, max_width_px: int, camera_source: str = "camera") -> CameraModel:
     """The camera re-gridded to the processing size; its aspect ratio must match the video's."""
     cam_aspect = camera.width_px / camera.height_px
@@ -92,6 +132,12 @@ def camera_for_video(camera: CameraModel, info: VideoInfo, max_width_px: int, ca
 
 def gray_frames(info: VideoInfo, size_px: tuple[int, int]) -> Iterator[np.ndarray]:
     """Yield uint8 grayscale frames at ``size_px`` (width, height)."""
+    for _, gray in source_and_gray_frames(info, size_px):
+        yield gray
+
+
+def source_and_gray_frames(info: VideoInfo, size_px: tuple[int, int]) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """Yield (the frame as decoded, uint8 grayscale at ``size_px`` (width, height)) pairs."""
     cap = cv2.VideoCapture(str(info.path))
     try:
         while True:
@@ -101,6 +147,6 @@ def gray_frames(info: VideoInfo, size_px: tuple[int, int]) -> Iterator[np.ndarra
             gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
             if (gray.shape[1], gray.shape[0]) != size_px:
                 gray = cv2.resize(gray, size_px, interpolation=cv2.INTER_AREA)
-            yield gray
+            yield frame, gray
     finally:
         cap.release()

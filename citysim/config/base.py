@@ -31,8 +31,12 @@ class Spec(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
-def describe_validation_error(exc: ValidationError) -> str:
-    """One line per bad field with its full dotted path (FieldPathError paths appended)."""
+def describe_validation_error(exc: ValidationError, model: type[BaseModel] | None = None) -> str:
+    """One line per bad field with its full dotted path (FieldPathError paths appended); an
+    unknown field gets the nearest valid names of the section it is in.
+
+    ``model``: the class that was validated; default the ``Spec`` subclass the error is titled
+    after (pydantic titles an error with the class name, e.g. "Scenario")."""
     line_errors = []
     for err in exc.errors():
         ctx = err.get("ctx") or {}
@@ -42,4 +46,17 @@ def describe_validation_error(exc: ValidationError) -> str:
         if ctx:
             entry["ctx"] = ctx
         line_errors.append(entry)
-    return format_validation_error(ValidationError.from_exception_data(exc.title, line_errors))
+    if model is None:
+        model = _spec_named(exc.title)
+    return format_validation_error(ValidationError.from_exception_data(exc.title, line_errors), model=model)
+
+
+def _spec_named(name: str) -> type[Spec] | None:
+    """The Spec subclass called ``name``, found among the subclasses already defined."""
+    todo = [Spec]
+    while todo:
+        cls = todo.pop()
+        if cls.__name__ == name:
+            return cls
+        todo.extend(cls.__subclasses__())
+    return None

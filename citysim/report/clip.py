@@ -18,7 +18,7 @@ from tqdm import tqdm
 from citysim.config.scenario import Scenario
 from citysim.report.topdown import plot_topdown
 from citysim.sim.loop import RunError
-from citysim.sim.night import Night, build_night
+from citysim.sim.night import build_night
 from detector.draw import draw_boxes, draw_detections
 from detector.outdir import staged_output
 
@@ -33,8 +33,8 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
     ``detect`` the video shows the truth (left) beside the detector's boxes (right), each half
     captioned.
     """
+    check_clip(scenario, lamp, duration_s, start_s)  # before the night is built: a mistake costs nothing
     night = build_night(scenario)
-    check_clip(night, lamp, duration_s, start_s)
     night.start_physics()
     renderer = night.renderer(lamp)
     camera = renderer.camera
@@ -75,14 +75,15 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
     return stats
 
 
-def check_clip(night: Night, lamp: int, duration_s: float, start_s: float) -> None:
-    """The clip's arguments against the scenario, before any frame is rendered."""
-    if not 0 <= lamp < night.n_lamps:
-        raise RunError(f"--lamp: must be in 0..{night.n_lamps - 1} for {night.scenario.name}, got {lamp}")
+def check_clip(scenario: Scenario, lamp: int, duration_s: float, start_s: float) -> None:
+    """The clip's arguments against the scenario, before anything is built or rendered."""
+    n_lamps = len(scenario.lamps.positions_x_m)
+    if not 0 <= lamp < n_lamps:
+        raise RunError(f"--lamp: must be in 0..{n_lamps - 1} for {scenario.name}, got {lamp}")
     if not duration_s > 0:
         raise RunError(f"--duration: must be > 0 s, got {duration_s}")
-    if not 0 <= start_s < night.scenario.duration_s:
-        raise RunError(f"--start: must be in 0..{night.scenario.duration_s:g} s (the scenario's night), got {start_s}")
+    if not 0 <= start_s < scenario.duration_s:
+        raise RunError(f"--start: must be >= 0 and < {scenario.duration_s:g} s (the scenario's night), got {start_s:g}")
 
 
 def _clip_frame(frame, detector, stats: dict) -> np.ndarray:

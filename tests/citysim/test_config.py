@@ -248,3 +248,33 @@ def test_missing_field_and_bad_files(tmp_path, raw):
     bad.write_text("- a\n- b\n")
     with pytest.raises(ScenarioError, match=r"bad\.yaml: a scenario is a YAML mapping"):
         load_scenario(bad)
+
+
+@pytest.mark.parametrize(
+    ("rename", "says"),
+    [
+        (("lamps.luminaire", "dim_level", "dim_levle"), "lamps.luminaire.dim_levle: unknown field; did you mean dim_level?"),
+        (("lamps.camera", "tilt_deg", "tilt_dg"), "lamps.camera.tilt_dg: unknown field; did you mean tilt_deg?"),
+        (("traffic.classes.pedestrian", "speed_mps", "sped_mps"),
+         "traffic.classes.pedestrian.sped_mps: unknown field; did you mean speed_mps"),
+        (("environment", "wind_mps", "wnd"), "environment.wnd: unknown field; valid: time_of_day, weather, wind_mps"),
+    ],
+    ids=["dim_levle", "tilt_dg", "sped_mps", "wnd"],
+)
+def test_unknown_field_suggests_the_nearest_valid_name(tmp_path, raw, rename, says):
+    section, good, typo = rename
+    data = copy.deepcopy(raw)
+    node = data
+    for key in section.split("."):
+        node = node[key]
+    node[typo] = node.pop(good, 1.0)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(_write(tmp_path, data))
+    assert says in str(info.value)
+
+
+def test_unknown_field_in_a_list_item_suggests_too(tmp_path, raw):
+    data = copy.deepcopy(raw)
+    data["traffic"]["scripted"][0]["spede_kmh"] = data["traffic"]["scripted"][0].pop("speed_kmh")
+    with pytest.raises(ScenarioError, match=r"traffic\.scripted\.0\.spede_kmh: unknown field; did you mean speed_kmh\?"):
+        load_scenario(_write(tmp_path, data))
