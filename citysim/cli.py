@@ -91,19 +91,20 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_plot(args) -> int:
-    from citysim.report import run_plots as plots
     from citysim.report.html import write_report
+    from citysim.report.run_plots import plot_run
+    from citysim.report.sweep_plots import plot_sweep
 
     folder = Path(args.dir)
     if (folder / "results.csv").exists():
-        paths = plots.plot_sweep(folder)
+        paths = plot_sweep(folder)
     elif (folder / "summary.json").exists():
-        paths = plots.plot_run(folder)
+        paths = plot_run(folder)
     else:
         from citysim.sim.loop import RunError
 
         raise RunError(f"{folder}: neither a run folder (summary.json) nor a sweep folder (results.csv)")
-    report = write_report(folder)
+    report = write_report(folder, plots=paths)  # the plots just drawn: not drawn twice
     print(f"{len(paths)} plots written to {folder}/plots/; report: {report}")
     return 0
 

@@ -72,10 +72,10 @@ def _notes(folder: Path) -> str:
     return "".join(f'<p class="note">{html.escape(line)}</p>' for line in lines)
 
 
-def _run_section(folder: Path) -> tuple[str, list[Path]]:
+def _run_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Path]]:
     from citysim.report.run_plots import load_summary, plot_run
 
-    paths = plot_run(folder)
+    paths = plot_run(folder) if plots is None else plots
     summary = load_summary(folder)
     figures = summary["controllers"]
     rows = []
@@ -138,10 +138,10 @@ def best_settings(rows: list[dict[str, str]], axes: list[str]) -> list[dict]:
     return out
 
 
-def _sweep_section(folder: Path) -> tuple[str, list[Path]]:
+def _sweep_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Path]]:
     from citysim.report.sweep_plots import SweepTable, plot_sweep
 
-    paths = plot_sweep(folder)
+    paths = plot_sweep(folder) if plots is None else plots
     table = SweepTable.load(folder)
     axes = table.axes
     sweep = table.sweep
@@ -183,14 +183,17 @@ def _sweep_section(folder: Path) -> tuple[str, list[Path]]:
     return body, paths
 
 
-def write_report(folder: str | Path) -> Path:
-    """Draw the folder's plots and write FOLDER/report.html (self-contained); returns its path."""
+def write_report(folder: str | Path, plots: list[Path] | None = None) -> Path:
+    """Draw the folder's plots and write FOLDER/report.html (self-contained); returns its path.
+
+    ``plots``: PNGs already drawn for this folder (by ``plot_run`` or ``plot_sweep``), embedded
+    as they are instead of drawing them again."""
     folder = Path(folder)
     if (folder / "results.csv").exists():
-        body, paths = _sweep_section(folder)
+        body, paths = _sweep_section(folder, plots)
         kind = "sweep"
     elif (folder / "summary.json").exists():
-        body, paths = _run_section(folder)
+        body, paths = _run_section(folder, plots)
         kind = "run"
     else:
         raise PlotError(

@@ -10,8 +10,9 @@
   controller, with the object passages through each lamp's zone shaded by class;
 * ``lag_cdf.png``: share of zone entries lit within a given lag, per class.
 
-Sweep plots live in ``plots_sweep`` (``plot_sweep`` is re-exported here) and the
-HTML page in ``report`` (``write_report``). Every function returns the paths it wrote.
+Sweep plots live in ``citysim.report.sweep_plots`` (which borrows this module's hourly
+bars and lag CDF) and the HTML page in ``citysim.report.html``; neither is imported
+here, so the report package has no import circle. Every function returns the paths it wrote.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from citysim.report.common import (
     write_notes,
 )
 
-__all__ = ["PlotError", "plot_run", "plot_sweep", "write_report"]
+__all__ = ["PlotError", "plot_run"]
 
 #: Lamps shown in lamp_levels.png, and the longest stretch of time shown (s).
 LEVEL_PLOT_LAMPS = 3
@@ -305,16 +306,3 @@ def plot_lag_cdf(passages: list[dict], controllers: list[str], path: Path, title
     fig.suptitle(f"{title_prefix}illumination lag per class (0 = lit on entry)", y=1.03)
     return save(fig, path)
 
-
-def plot_sweep(sweep_dir: str | Path) -> list[Path]:
-    """See ``citysim.report.sweep_plots.plot_sweep``."""
-    from citysim.report.sweep_plots import plot_sweep as _plot_sweep
-
-    return _plot_sweep(sweep_dir)
-
-
-def write_report(folder: str | Path) -> Path:
-    """See ``citysim.report.html.write_report``."""
-    from citysim.report.html import write_report as _write_report
-
-    return _write_report(folder)

@@ -17,15 +17,16 @@ import numpy as np
 import pytest
 
 from citysim.config.scenario import scenario_from_mapping
-from citysim.report.run_plots import PlotError, plot_run, plot_sweep
 from citysim.report.common import CONTROLLER_COLORS, axis_label, clock_label
 from citysim.report.html import best_settings, write_report
+from citysim.report.run_plots import PlotError, plot_run
+from citysim.report.sweep_plots import plot_sweep
 from citysim.sim.loop import run_comparison
 from citysim.sweep.results import ResultsFile, flatten_summary
 from citysim.sweep.spec import point_id
 from tests.citysim.streets import two_way_street
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 SCENARIO = {
     "name": "tiny_plots",
     "seed": 11,
