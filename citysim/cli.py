@@ -46,8 +46,24 @@ def cmd_run(args) -> int:
     summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=args.out, workers=workers,
                              scenario_file=str(args.scenario))
     print(comparison_table(summary))
-    print(f"\nresults written to {args.out}/: summary.json, objects.csv, lamps.csv, plots/")
+    print("\n" + "\n".join(run_outputs(Path(args.out))))
     return 0
+
+
+def run_outputs(out: Path) -> list[str]:
+    """Write report.html beside the plots the run drew; the lines saying where everything is."""
+    from citysim.report.html import write_report
+    from citysim.report.run_plots import RUN_PLOTS
+
+    plots = [out / "plots" / name for name in RUN_PLOTS if (out / "plots" / name).exists()]
+    where = [("figures per controller", f"{out / 'summary.json'}"),
+             ("per object and lamp", f"{out / 'objects.csv'}, {out / 'lamps.csv'}")]  # fmt: skip
+    if plots:
+        report = write_report(out, plots=plots)  # the plots run_comparison drew, not drawn again
+        where += [(f"plots ({len(plots)} PNGs)", f"{out / 'plots'}/"),
+                  ("report (open in a browser)", str(report))]  # fmt: skip
+    width = max(len(label) for label, _ in where)
+    return [f"results written to {out}/:"] + [f"  {label:<{width}}  {path}" for label, path in where]
 
 
 def comparison_table(summary: dict) -> str:
