@@ -15,6 +15,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 # A real scenario through every controller: about 10 simulated minutes of a suburban night.
+# Ends with results/demo/report.html (plots, figures, what they mean); its path is printed last.
 demo: $(STAMP)
 	$(VENV)/bin/citysim run scenarios/suburban_night.yaml --out results/demo --duration 600
 

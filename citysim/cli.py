@@ -58,13 +58,28 @@ def cmd_run(args) -> int:
     summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=args.out, workers=workers,
                              scenario_file=str(args.scenario))
     from citysim.report.run_plots import plot_run
-
     from citysim.report.table import comparison_table
 
-    plot_run(args.out)
+    plot_run(args.out)  # the run folder's data is written; its pictures are drawn here, outside the simulation
     print(comparison_table(summary))
-    print(f"\nresults written to {args.out}/: summary.json, objects.csv, lamps.csv, plots/")
+    print("\n" + "\n".join(run_outputs(Path(args.out))))
     return 0
+
+
+def run_outputs(out: Path) -> list[str]:
+    """Write report.html beside the plots the run drew; the lines saying where everything is."""
+    from citysim.report.html import write_report
+    from citysim.report.run_plots import RUN_PLOTS
+
+    plots = [out / "plots" / name for name in RUN_PLOTS if (out / "plots" / name).exists()]
+    where = [("figures per controller", f"{out / 'summary.json'}"),
+             ("per object and lamp", f"{out / 'objects.csv'}, {out / 'lamps.csv'}")]  # fmt: skip
+    if plots:
+        report = write_report(out, plots=plots)  # the plots run_comparison drew, not drawn again
+        where += [(f"plots ({len(plots)} PNGs)", f"{out / 'plots'}/"),
+                  ("report (open in a browser)", str(report))]  # fmt: skip
+    width = max(len(label) for label, _ in where)
+    return [f"results written to {out}/:"] + [f"  {label:<{width}}  {path}" for label, path in where]
 
 
 def cmd_render(args) -> int:
@@ -94,19 +109,20 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_plot(args) -> int:
-    from citysim.report import run_plots as plots
     from citysim.report.html import write_report
+    from citysim.report.run_plots import plot_run
+    from citysim.report.sweep_plots import plot_sweep
 
     folder = Path(args.dir)
     if (folder / "results.csv").exists():
-        paths = plots.plot_sweep(folder)
+        paths = plot_sweep(folder)
     elif (folder / "summary.json").exists():
-        paths = plots.plot_run(folder)
+        paths = plot_run(folder)
     else:
         from citysim.sim.loop import RunError
 
         raise RunError(f"{folder}: neither a run folder (summary.json) nor a sweep folder (results.csv)")
-    report = write_report(folder)
+    report = write_report(folder, plots=paths)  # the plots just drawn: not drawn twice
     print(f"{len(paths)} plots written to {folder}/plots/; report: {report}")
     return 0
 

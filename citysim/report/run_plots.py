@@ -5,69 +5,66 @@
 
 * ``energy.png``: energy per controller (kWh), split into luminaire, standby and
   sensing where the summary has the split, labelled with savings vs always-on;
-* ``energy_per_hour.png``: energy per hour of the night per controller;
-* ``lamp_levels.png``: light level over time of the busiest lamps under every
-  controller, with the object passages through each lamp's zone shaded by class;
-* ``lag_cdf.png``: share of zone entries lit within a given lag, per class.
+* ``energy_per_hour.png``: energy per clock hour of the night per controller;
+* ``lamp_levels.png``: light level over clock time of the busiest lamps, one row of
+  panels per controller (true levels, nothing shifted), with the object passages
+  through each lamp's zone drawn under each level line by class;
+* ``lag_cdf.png``: share of zone entries lit within a given lag, per class, with the
+  crossings never lit shown apart as bars (they have no lag to draw).
 
-Sweep plots live in ``plots_sweep`` (``plot_sweep`` is re-exported here) and the
-HTML page in ``report`` (``write_report``). Every function returns the paths it wrote.
+Every legend gives the number of objects behind it, and a run resting on fewer than
+``FEW_OBJECTS`` objects gets a warning under each plot. Sweep plots live in
+``citysim.report.sweep_plots`` (which borrows this module's hourly bars and lag CDF)
+and the HTML page in ``citysim.report.html``; neither is imported here, so the report
+package has no import circle. Every function returns the paths it wrote.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from collections import defaultdict
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from citysim.report.common import (
     CLASS_COLORS,
     TARGET_CLASSES,
     PlotError,
     clock_label,
+    clock_text,
     controller_color,
     ecdf,
+    fmt_num,
+    fmt_pct,
     plt,
     read_csv,
     save,
-    to_float,
+    set_clock_axis,
+    warn_few_objects,
     write_notes,
 )
+from citysim.report.runfacts import RunFacts, load_summary, read_passages, run_facts
 
-__all__ = ["PlotError", "plot_run", "plot_sweep", "write_report"]
+__all__ = ["RUN_PLOTS", "PlotError", "load_summary", "plot_run", "read_passages"]
 
+#: File names of the run plots, in the order the report shows them.
+RUN_PLOTS = ("energy.png", "energy_per_hour.png", "lamp_levels.png", "lag_cdf.png")
 #: Lamps shown in lamp_levels.png, and the longest stretch of time shown (s).
 LEVEL_PLOT_LAMPS = 3
 LEVEL_PLOT_WINDOW_S = 600.0
 SPLIT_PARTS = (("luminaire", "luminaire"), ("standby", "driver standby"), ("sensing", "sensing"))
 
 
-def load_summary(run_dir: Path) -> dict:
-    path = run_dir / "summary.json"
-    if not path.exists():
-        raise PlotError(f"{run_dir}: no summary.json; not a run folder written by `citysim run`")
-    try:
-        return json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise PlotError(f"{path}: not valid JSON ({exc})") from None
+def objects_note(n_objects: int | None) -> str:
+    """'n=12 objects' for a legend title ('' when unknown)."""
+    return "" if n_objects is None else f"n={n_objects} {plural(n_objects, 'object')}"
 
 
-def start_hour_of(summary: dict) -> float | None:
-    """The run's clock hour at t = 0, from the summary or its scenario file (None if unknown)."""
-    if summary.get("start_hour") is not None:
-        return float(summary["start_hour"])
-    source = summary.get("scenario_file")
-    if source and Path(source).is_file():
-        from citysim.config.scenario import ScenarioError, load_scenario
-
-        try:
-            return load_scenario(source).start_hour
-        except ScenarioError:
-            return None
-    return None
+def plural(n: int, word: str) -> str:
+    return word if n == 1 else word + "s"
 
 
 def plot_run(run_dir: str | Path) -> list[Path]:
@@ -80,9 +77,12 @@ def plot_run(run_dir: str | Path) -> list[Path]:
     plot_dir = run_dir / "plots"
     notes: list[str] = []
     passages = read_passages(run_dir / "objects.csv")
-    paths = [plot_energy(summary, plot_dir / "energy.png")]
-    paths.append(plot_energy_per_hour(summary, plot_dir / "energy_per_hour.png"))
-    levels = plot_lamp_levels(run_dir, summary, passages, plot_dir / "lamp_levels.png", notes)
+    facts = run_facts(run_dir, summary, passages)
+    if facts.start_hour is None:
+        notes.append(f"time axes in run seconds, not clock time: {facts.scenario_note}")
+    paths = [plot_energy(summary, facts, plot_dir / "energy.png")]
+    paths.append(plot_energy_per_hour(summary, facts, plot_dir / "energy_per_hour.png"))
+    levels = plot_lamp_levels(run_dir, summary, passages, facts, plot_dir / "lamp_levels.png", notes)
     paths += [levels] if levels else []
     lag = plot_lag_cdf(passages, controllers, plot_dir / "lag_cdf.png",
                        f"{summary.get('scenario', '')}: ", notes)  # fmt: skip
@@ -91,7 +91,7 @@ def plot_run(run_dir: str | Path) -> list[Path]:
     return paths
 
 
-def plot_energy(summary: dict, path: Path) -> Path:
+def plot_energy(summary: dict, facts: RunFacts, path: Path) -> Path:
     """Bars of energy per controller (kWh) labelled with savings vs always-on."""
     figures = summary["controllers"]
     names = list(figures)
@@ -106,9 +106,8 @@ def plot_energy(summary: dict, path: Path) -> Path:
                    alpha=alpha, edgecolor="black", linewidth=0.5,
                    hatch={"luminaire": None, "standby": "..", "sensing": "//"}[key], label=label)  # fmt: skip
             bottom += part
-        legend = ax.legend(
-            title="energy drawn by", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8
-        )
+        title = "energy drawn by" + (f"\n(run: {objects_note(facts.objects)})" if facts.objects is not None else "")
+        legend = ax.legend(title=title, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
         for handle in legend.legend_handles:
             handle.set_facecolor("white")
     else:
@@ -118,38 +117,38 @@ def plot_energy(summary: dict, path: Path) -> Path:
     for i, n in enumerate(names):
         kwh = float(figures[n]["energy_kwh"])
         savings = figures[n].get("savings_vs_always_on")
-        text = f"{kwh:.3g} kWh"
+        text = f"{fmt_num(kwh)} kWh"
         if savings is not None and n != "always_on":
-            text += (
-                f"\nsaves {100 * savings:.1f} %"
-                if savings >= 0
-                else f"\nuses {-100 * savings:.1f} % more"
-            )
+            text += f"\nsaves {fmt_pct(savings)}" if savings >= 0 else f"\nuses {fmt_pct(-savings)} more"
         ax.text(i, kwh + 0.02 * top, text, ha="center", va="bottom", fontsize=8)
     ax.set_xticks(x, names, rotation=20, ha="right")
     ax.set_axisbelow(True)
     ax.set_ylabel("energy over the run (kWh)")
     ax.set_ylim(0, top * 1.25 if top > 0 else 1)
-    hours = summary.get("duration_s", 0) / 3600
-    ax.set_title(f"{summary.get('scenario', '')}: energy per controller\n"
-                 f"{summary.get('lamps', '?')} lamps, {hours:.2g} h simulated, savings vs always-on")  # fmt: skip
+    span = facts.clock_span() or f"{fmt_num(facts.duration_s / 3600)} h"
+    ax.set_title(f"{summary.get('scenario', '')}: energy per controller, {span}\n"
+                 f"{summary.get('lamps', '?')} lamps; savings vs always-on")  # fmt: skip
     ax.grid(axis="y", alpha=0.3)
+    warn_few_objects(fig, facts.objects)
     return save(fig, path)
 
 
-def plot_energy_per_hour(summary: dict, path: Path) -> Path:
+def plot_energy_per_hour(summary: dict, facts: RunFacts, path: Path) -> Path:
     """Grouped bars: energy drawn in each hour of the night, per controller."""
     figures = summary["controllers"]
     names = list(figures)
     per_hour = {
         n: list(figures[n].get("energy_per_hour_kwh") or [figures[n]["energy_kwh"]]) for n in names
     }
-    return bars_per_hour(per_hour, start_hour_of(summary), summary.get("duration_s"), path,
-                         f"{summary.get('scenario', '')}: energy per hour of the night")  # fmt: skip
+    return bars_per_hour(per_hour, facts.start_hour, summary.get("duration_s"), path,
+                         f"{summary.get('scenario', '')}: energy per hour of the night",
+                         legend_note=objects_note(facts.objects), warn_objects=facts.objects)  # fmt: skip
 
 
 def bars_per_hour(per_hour: dict[str, list[float]], start_hour: float | None, duration_s: float | None,
-                  path: Path, title: str) -> Path:  # fmt: skip
+                  path: Path, title: str, *, legend_note: str = "", warn_objects: int | None = None) -> Path:  # fmt: skip
+    """Grouped bars per clock hour; ``legend_note`` (the objects behind them) goes under the legend
+    title, and ``warn_objects`` below FEW_OBJECTS writes the few-objects warning."""
     names = list(per_hour)
     n_hours = max(len(v) for v in per_hour.values())
     fig, ax = plt.subplots(figsize=(max(5.5, 0.9 * n_hours * max(1, len(names)) / 2 + 3), 4.2))
@@ -159,9 +158,10 @@ def bars_per_hour(per_hour: dict[str, list[float]], start_hour: float | None, du
         ax.bar(np.arange(n_hours) + (i - (len(names) - 1) / 2) * width, values, width,
                label=n, color=controller_color(n, names), edgecolor="black", linewidth=0.4)  # fmt: skip
     if start_hour is not None:
-        ticks = [
-            f"{clock_label(start_hour, k)}-{clock_label(start_hour, k + 1)}" for k in range(n_hours)
-        ]
+        ends = [clock_label(start_hour, k + 1) for k in range(n_hours)]
+        if duration_s is not None and duration_s < 3600 * n_hours - 1e-6:  # a partial last hour
+            ends[-1] = clock_text(start_hour, duration_s)
+        ticks = [f"{clock_label(start_hour, k)}-{ends[k]}" for k in range(n_hours)]
         ax.set_xlabel("hour of the night (clock time)")
     else:
         ticks = [f"hour {k + 1}" for k in range(n_hours)]
@@ -170,26 +170,14 @@ def bars_per_hour(per_hour: dict[str, list[float]], start_hour: float | None, du
     ax.set_axisbelow(True)
     ax.set_ylabel("energy in that hour (kWh)")
     if duration_s is not None and duration_s % 3600 > 1e-6:
-        title += f"\n(the last hour is partial: the run lasts {duration_s / 60:.3g} min)"
+        title += f"\n(the last hour is partial: the run lasts {fmt_num(duration_s / 60)} min)"
     ax.set_title(title)
+    legend_title = "controller" + (f"\n({legend_note})" if legend_note else "")
     # beside the bars, not over them (a short run has one hour of tall bars)
-    ax.legend(title="controller", fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.legend(title=legend_title, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(axis="y", alpha=0.3)
+    warn_few_objects(fig, warn_objects)
     return save(fig, path)
-
-
-def read_passages(path: Path) -> list[dict]:
-    """objects.csv rows with numbers parsed (empty list if the file is missing)."""
-    if not path.exists():
-        return []
-    out = []
-    for r in read_csv(path):
-        out.append({
-            "controller": r["controller"], "object_id": r["object_id"], "cls": r["cls"],
-            "lamp": int(r["lamp"]), "t_enter_s": to_float(r["t_enter_s"]),
-            "t_exit_s": to_float(r["t_exit_s"]), "lag_s": to_float(r["lag_s"]),
-        })  # fmt: skip
-    return out
 
 
 def busiest_window(
@@ -207,13 +195,25 @@ def busiest_window(
     return t0, t0 + LEVEL_PLOT_WINDOW_S
 
 
-def plot_lamp_levels(run_dir: Path, summary: dict, passages: list[dict], path: Path,
-                     notes: list[str]) -> Path | None:  # fmt: skip
-    """Level over time of the busiest lamps per controller, passages shaded by class."""
+@dataclass
+class LevelData:
+    """What lamp_levels.png draws: the busiest lamps' levels per controller in one time window."""
+
+    names: list[str]  # controllers, one row of panels each
+    lamps: list[int]  # the busiest lamps, one column each
+    t0_s: float
+    t1_s: float
+    series: dict[tuple[str, int], np.ndarray]  # (controller, lamp) -> (N, 2) of (t_s, level)
+    passages: list[dict]  # target passages at those lamps (the first controller's: same traffic)
+    classes: list[str] = field(default_factory=list)
+    dim_level: float | None = None
+
+
+def level_data(run_dir: Path, summary: dict, passages: list[dict], facts: RunFacts) -> LevelData | str:
+    """The data of lamp_levels.png, or why it cannot be drawn."""
     lamps_csv = run_dir / "lamps.csv"
     if not lamps_csv.exists():
-        notes.append("lamp_levels.png skipped: the run folder has no lamps.csv")
-        return None
+        return "lamp_levels.png skipped: the run folder has no lamps.csv"
     names = list(summary["controllers"])
     reference = names[0]  # every controller sees the same traffic: show one controller's passages
     shown = [p for p in passages if p["controller"] == reference and p["cls"] in TARGET_CLASSES]
@@ -221,8 +221,7 @@ def plot_lamp_levels(run_dir: Path, summary: dict, passages: list[dict], path: P
     for p in shown:
         counts[p["lamp"]] += 1
     n_lamps = int(summary.get("lamps") or 1)
-    lamps = sorted(range(n_lamps), key=lambda i: (-counts.get(i, 0), i))[:LEVEL_PLOT_LAMPS]
-    lamps.sort()
+    lamps = sorted(sorted(range(n_lamps), key=lambda i: (-counts.get(i, 0), i))[:LEVEL_PLOT_LAMPS])
     t0, t1 = busiest_window(shown, lamps, float(summary.get("duration_s", 0.0)))
     series: dict[tuple[str, int], list[tuple[float, float]]] = defaultdict(list)
     for r in read_csv(lamps_csv):
@@ -232,89 +231,190 @@ def plot_lamp_levels(run_dir: Path, summary: dict, passages: list[dict], path: P
             if t0 <= t <= t1:
                 series[(r["controller"], lamp)].append((t, float(r["level"])))
     if not series:
-        notes.append("lamp_levels.png skipped: lamps.csv has no rows")
+        return "lamp_levels.png skipped: lamps.csv has no rows"
+    in_window = [p for p in shown if p["lamp"] in lamps and p["t_exit_s"] >= t0 and p["t_enter_s"] <= t1]
+    classes = [c for c in TARGET_CLASSES if any(p["cls"] == c for p in in_window)]
+    dim = facts.scenario.lamps.luminaire.dim_level if facts.scenario is not None else None
+    return LevelData(names, lamps, t0, t1, {k: np.array(v) for k, v in series.items()}, in_window,
+                     classes, dim)  # fmt: skip
+
+
+def plot_lamp_levels(run_dir: Path, summary: dict, passages: list[dict], facts: RunFacts, path: Path,
+                     notes: list[str]) -> Path | None:  # fmt: skip
+    """Level over time of the busiest lamps, one row per controller, passages drawn by class."""
+    data = level_data(run_dir, summary, passages, facts)
+    if isinstance(data, str):
+        notes.append(data)
         return None
-    classes = [c for c in TARGET_CLASSES if any(p["cls"] == c for p in shown)]
-    row_h = 0.14  # passages are drawn as bars in one row per class below the level axis
-    fig, axes = plt.subplots(len(lamps), 1, figsize=(10, (1.6 + 0.25 * len(classes)) * len(lamps) + 1.0),
-                             sharex=True, squeeze=False, layout="constrained")  # fmt: skip
-    for ax, lamp in zip(axes[:, 0], lamps, strict=True):
-        for j, cls in enumerate(classes):
-            spans = [(p["t_enter_s"], max(p["t_exit_s"] - p["t_enter_s"], 0.2)) for p in shown
-                     if p["lamp"] == lamp and p["cls"] == cls and p["t_exit_s"] >= t0 and p["t_enter_s"] <= t1]  # fmt: skip
-            ax.broken_barh(spans, (-(j + 1) * row_h, row_h * 0.75), color=CLASS_COLORS[cls], alpha=0.55,
-                           lw=0.3, edgecolor="black", label=f"{cls} in zone")  # fmt: skip
-        for k, n in enumerate(names):
-            pts = np.array(series.get((n, lamp), []))
-            if len(pts):
-                ax.plot(pts[:, 0], pts[:, 1] + 0.012 * k, drawstyle="steps-post", lw=1.4,
-                        color=controller_color(n, names), label=n)  # fmt: skip
-        ax.set_ylim(-(len(classes) + 0.3) * row_h, 1.1)
-        rows_y = [-(j + 1) * row_h + row_h * 0.375 for j in range(len(classes))]
-        ax.set_yticks([1.0, 0.5, 0.0, *rows_y], ["1", "0.5", "0", *classes], fontsize=8)
-        ax.axhline(0, color="black", lw=0.5)
-        ax.set_ylabel(f"lamp {lamp}\nlight level (0-1)")
-        ax.grid(alpha=0.3)
-    axes[-1, 0].set_xlabel("simulated time (s)")
-    axes[-1, 0].set_xlim(t0, t1)
-    handles, labels = axes[0, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=min(7, len(labels)), fontsize=8)
-    window = (
-        "whole run" if t0 == 0 and t1 >= summary.get("duration_s", 0) else f"{t0:.0f}-{t1:.0f} s"
-    )
-    fig.suptitle(f"{summary.get('scenario', '')}: light level of the {len(lamps)} busiest lamps ({window})\n"
-                 "bars below the level: objects passing through the lamp's zone, one bar per passage")  # fmt: skip
-    return save(fig, path)
+    window = ("whole run" if data.t0_s == 0 and data.t1_s >= summary.get("duration_s", 0)
+              else f"busiest {fmt_num(LEVEL_PLOT_WINDOW_S / 60)} min")  # fmt: skip
+    title = (f"{summary.get('scenario', '')}: light level of the {len(data.lamps)} busiest lamps "
+             f"({window}), one row per controller\n"
+             "true levels (1 = full); bars under each line: objects in that lamp's zone")  # fmt: skip
+    return save(draw_lamp_levels(data, facts, title), path)
+
+
+ROW_H = 0.14  # height of one class's row of passage bars under a level panel (level units)
+
+
+def draw_lamp_levels(data: LevelData, facts: RunFacts, title: str) -> Figure:
+    """Small multiples: rows are controllers, columns lamps; each panel one lamp's true level."""
+    rows, cols = len(data.names), len(data.lamps)
+    fig, axes = plt.subplots(rows, cols, sharex=True, sharey=True, squeeze=False, layout="constrained",
+                             figsize=(3.4 * cols + 1.8, (0.95 + 0.18 * len(data.classes)) * rows + 1.8))  # fmt: skip
+    ticks = sorted({0.0, 0.5, 1.0} | ({data.dim_level} if data.dim_level else set()))
+    rows_y = [-(j + 1) * ROW_H + ROW_H * 0.375 for j in range(len(data.classes))]
+    for i, name in enumerate(data.names):
+        for j, lamp in enumerate(data.lamps):
+            ax = axes[i, j]
+            _draw_passages(ax, data, lamp)
+            pts = data.series.get((name, lamp))
+            if pts is not None and len(pts):
+                ax.plot(pts[:, 0], pts[:, 1], drawstyle="steps-post", lw=1.4,
+                        color=controller_color(name, data.names))  # fmt: skip
+            ax.axhline(0, color="black", lw=0.5)
+            ax.grid(alpha=0.3)
+            if i == 0:
+                n_pass = sum(p["lamp"] == lamp for p in data.passages)
+                ax.set_title(f"lamp {lamp} ({n_pass} {plural(n_pass, 'passage')})", fontsize=9)
+            ax.tick_params(axis="y", labelsize=7)
+        axes[i, 0].set_ylabel(f"{name}\nlevel", fontsize=8, color=controller_color(name, data.names))
+    axes[0, 0].set_ylim(-(len(data.classes) + 0.3) * ROW_H, 1.12)
+    axes[0, 0].set_yticks([*ticks, *rows_y], [fmt_num(t) for t in ticks] + data.classes, fontsize=7)
+    for ax in axes[-1]:
+        set_clock_axis(ax, facts.start_hour, data.t0_s, data.t1_s)
+        ax.tick_params(axis="x", labelsize=7, rotation=30)
+    handles, labels = [], []
+    for cls in data.classes:
+        n_obj = len({p["object_id"] for p in data.passages if p["cls"] == cls})
+        handles.append(plt.Rectangle((0, 0), 1, 1, color=CLASS_COLORS[cls], alpha=0.55))
+        labels.append(f"{cls} in zone (n={n_obj})")
+    if handles:
+        fig.legend(handles, labels, loc="outside lower center", ncol=len(handles), fontsize=8,
+                   title="objects passing these lamps", title_fontsize=8)  # fmt: skip
+    fig.suptitle(title, fontsize=10)
+    warn_few_objects(fig, facts.objects)
+    return fig
+
+
+def _draw_passages(ax, data: LevelData, lamp: int) -> None:
+    """One bar per passage through ``lamp``'s zone, one row per class, under the level axis."""
+    for j, cls in enumerate(data.classes):
+        spans = [(p["t_enter_s"], max(p["t_exit_s"] - p["t_enter_s"], 0.2)) for p in data.passages
+                 if p["lamp"] == lamp and p["cls"] == cls]  # fmt: skip
+        ax.broken_barh(spans, (-(j + 1) * ROW_H, ROW_H * 0.75), color=CLASS_COLORS[cls], alpha=0.55,
+                       lw=0.3, edgecolor="black")  # fmt: skip
+
+
+@dataclass
+class LagGroup:
+    """One controller's zone entries of one class: lags of those lit, and how many were never lit."""
+
+    lit_lags_s: list[float] = field(default_factory=list)
+    never_lit: int = 0
+    on_entry: int = 0
+
+    @property
+    def entries(self) -> int:
+        return len(self.lit_lags_s) + self.never_lit
+
+
+def lag_groups(passages: list[dict], controllers: list[str]) -> dict[str, dict[str, LagGroup]]:
+    """class -> controller -> LagGroup, over target passages (classes in TARGET_CLASSES order).
+
+    A never-lit crossing's lag_s is its whole stay in the zone, not a time to light: it goes
+    to ``never_lit``, not into the lags.
+    """
+    groups: dict[str, dict[str, LagGroup]] = defaultdict(dict)
+    for p in passages:
+        if p["cls"] not in TARGET_CLASSES or p["controller"] not in controllers:
+            continue
+        if math.isnan(p["lag_s"]) and not p.get("never_lit"):
+            continue
+        g = groups[p["cls"]].setdefault(p["controller"], LagGroup())
+        if p.get("never_lit"):
+            g.never_lit += 1
+        else:
+            g.lit_lags_s.append(p["lag_s"])
+            g.on_entry += bool(p.get("lit_on_entry"))
+    return {c: groups[c] for c in TARGET_CLASSES if c in groups}
+
+
+def object_counts(passages: list[dict]) -> dict[str, int]:
+    """class -> distinct target objects (keyed by ``source`` too: a sweep pools many runs)."""
+    seen: dict[str, set] = defaultdict(set)
+    for p in passages:
+        if p["cls"] in TARGET_CLASSES:
+            seen[p["cls"]].add((p.get("source", ""), p["object_id"]))
+    return {c: len(v) for c, v in seen.items()}
 
 
 def plot_lag_cdf(passages: list[dict], controllers: list[str], path: Path, title_prefix: str,
                  notes: list[str]) -> Path | None:  # fmt: skip
-    """One panel per target class: share of zone entries lit within x seconds, per controller."""
-    by_class: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
-    for p in passages:
-        if p["cls"] in TARGET_CLASSES and not math.isnan(p["lag_s"]):
-            by_class[p["cls"]][p["controller"]].append(p["lag_s"])
-    classes = [c for c in TARGET_CLASSES if c in by_class]
-    if not classes:
+    """One panel per target class: share of zone entries lit within x seconds, never-lit apart."""
+    groups = lag_groups(passages, controllers)
+    if not groups:
         notes.append(
             "lag_cdf.png skipped: no target object crossed a lamp zone (objects.csv empty or missing)"
         )
         return None
-    fig, axes = plt.subplots(1, len(classes), figsize=(3.6 * len(classes) + 0.8, 3.6), squeeze=False,
-                             sharey=True)  # fmt: skip
-    for ax, cls in zip(axes[0], classes, strict=True):
-        lag_max = max(max(v) for v in by_class[cls].values())
-        right = max(1.0, lag_max * 1.05)
-        for n in controllers:
-            lags = by_class[cls].get(n)
-            if not lags:
-                continue
-            x, y = ecdf(np.array(lags))
-            lit_pct = 100.0 * np.mean(np.array(lags) <= 0.0)
-            ax.step(np.r_[0.0, x, right], np.r_[0.0, y, 1.0], where="post", lw=1.5,
-                    color=controller_color(n, controllers), label=f"{n} ({lit_pct:.0f} % lit on entry)")  # fmt: skip
-        n_visits = max(len(v) for v in by_class[cls].values())
-        ax.set_title(f"{cls} ({n_visits} zone entries)")
-        ax.set_xlim(0, right)
-        ax.set_xlabel("illumination lag (s)")
-        ax.grid(alpha=0.3)
-    axes[0, 0].set_ylabel("share of zone entries lit within lag")
-    axes[0, 0].set_ylim(0, 1.02)
-    for ax in axes[0]:
-        ax.legend(title="controller", fontsize=7, loc="lower right")
-    fig.suptitle(f"{title_prefix}illumination lag per class (0 = lit on entry)", y=1.03)
+    objects = object_counts(passages)
+    fig = draw_lag_cdf(groups, controllers, objects, f"{title_prefix}illumination lag per class")
+    warn_few_objects(fig, sum(objects.values()))
     return save(fig, path)
 
 
-def plot_sweep(sweep_dir: str | Path) -> list[Path]:
-    """See ``citysim.report.sweep_plots.plot_sweep``."""
-    from citysim.report.sweep_plots import plot_sweep as _plot_sweep
+def draw_lag_cdf(groups: dict[str, dict[str, LagGroup]], controllers: list[str],
+                 objects: dict[str, int], title: str) -> Figure:  # fmt: skip
+    """Per class: the CDF of lags of lit entries (it tops out at the share lit), and a bar per
+    controller beside it with the share never lit."""
+    classes = list(groups)
+    fig = plt.figure(figsize=(4.9 * len(classes) + 0.6, 4.0), layout="constrained")
+    grid = fig.add_gridspec(1, 2 * len(classes), width_ratios=[4.0, 1.3] * len(classes))
+    first = None
+    for k, cls in enumerate(classes):
+        ax = fig.add_subplot(grid[0, 2 * k], sharey=first)
+        bars = fig.add_subplot(grid[0, 2 * k + 1], sharey=ax)
+        first = first or ax
+        mine = {n: groups[cls][n] for n in controllers if n in groups[cls]}
+        lag_max = max((max(g.lit_lags_s) for g in mine.values() if g.lit_lags_s), default=0.0)
+        right = max(1.0, lag_max * 1.05)
+        for n, g in mine.items():
+            color = controller_color(n, controllers)
+            label = f"{n}: {fmt_pct(g.on_entry / g.entries, 0)} lit on entry"
+            if g.lit_lags_s:
+                x, y = ecdf(np.array(g.lit_lags_s))
+                y = y * len(g.lit_lags_s) / g.entries  # the curve ends at the share lit
+                ax.step(np.r_[0.0, x, right], np.r_[0.0, y, y[-1]], where="post", lw=1.5,
+                        color=color, label=label)  # fmt: skip
+            else:
+                ax.plot([0.0, right], [0.0, 0.0], lw=1.5, color=color, label=label)
+        n_entries = max(g.entries for g in mine.values())
+        n_obj = objects.get(cls, 0)
+        ax.set_title(f"{cls} (n={n_obj} {plural(n_obj, 'object')}, {n_entries} zone entries)",
+                     fontsize=9)  # fmt: skip
+        ax.set_xlim(0, right)
+        ax.set_xlabel("illumination lag (s)")
+        ax.grid(alpha=0.3)
+        # under the panel: a CDF fills its lower right as often as its upper left
+        ax.legend(title=f"controller ({cls}: n={n_obj})", fontsize=7, title_fontsize=7,
+                  loc="upper center", bbox_to_anchor=(0.5, -0.2))  # fmt: skip
+        _draw_never_lit(bars, mine, controllers)
+    first.set_ylabel("share of zone entries lit within lag")
+    first.set_ylim(0, 1.05)
+    fig.suptitle(f"{title} (0 = lit on entry)\ncurves: entries lit, by lag; bars: entries whose "
+                 "lamp never reached full while the object was in the zone", fontsize=10)  # fmt: skip
+    return fig
 
-    return _plot_sweep(sweep_dir)
 
-
-def write_report(folder: str | Path) -> Path:
-    """See ``citysim.report.html.write_report``."""
-    from citysim.report.html import write_report as _write_report
-
-    return _write_report(folder)
+def _draw_never_lit(ax, groups: dict[str, LagGroup], controllers: list[str]) -> None:
+    names = list(groups)
+    shares = [groups[n].never_lit / groups[n].entries for n in names]
+    ax.bar(range(len(names)), shares, color=[controller_color(n, controllers) for n in names],
+           edgecolor="black", linewidth=0.5)  # fmt: skip
+    for i, n in enumerate(names):
+        ax.text(i, shares[i] + 0.02, f"{groups[n].never_lit}", ha="center", va="bottom", fontsize=7)
+    ax.set_xticks(range(len(names)), names, rotation=90, fontsize=7)
+    ax.tick_params(axis="y", labelleft=False)
+    ax.set_title("never lit\n(count on bar)", fontsize=8)
+    ax.grid(axis="y", alpha=0.3)

@@ -29,11 +29,11 @@ from pathlib import Path
 
 import numpy as np
 
-from citysim.report.run_plots import bars_per_hour, plot_lag_cdf, read_passages
 from citysim.report.common import (
     PlotError,
     axis_label,
     controller_color,
+    fmt_num,
     plt,
     read_csv,
     save,
@@ -41,6 +41,8 @@ from citysim.report.common import (
     to_float,
     write_notes,
 )
+from citysim.report.run_plots import bars_per_hour, plot_lag_cdf
+from citysim.report.runfacts import read_passages
 
 __all__ = ["SWEEP_METRICS", "SweepTable", "plot_sweep"]
 
@@ -139,6 +141,21 @@ class SweepTable:
     def n_seeds(self) -> int:
         return len({r["seed"] for r in self.ok}) or 1
 
+    def mean_objects(self) -> float | None:
+        """Mean number of objects crossing a lamp zone per finished point (None if not recorded)."""
+        per_point = {r["point_id"]: to_float(r.get("objects")) for r in self.ok}
+        finite = [v for v in per_point.values() if not math.isnan(v)]
+        return sum(finite) / len(finite) if finite else None
+
+    def objects_note(self) -> str:
+        """'mean n=41 objects per point' for legends ('' when results.csv has no objects column)."""
+        n = self.mean_objects()
+        return "" if n is None else f"mean n={fmt_num(n)} objects per point"
+
+    def legend_title(self) -> str:
+        note = self.objects_note()
+        return "controller" + (f"\n({note})" if note else "")
+
 
 def plot_sweep(sweep_dir: str | Path) -> list[Path]:
     """Draw every sweep plot into SWEEP_DIR/plots/; returns the PNG paths written."""
@@ -213,7 +230,7 @@ def plot_along_axis(table: SweepTable, axis: str, path: Path) -> Path:
         if not numeric:
             ax.set_xticks(xs, [str(v) for v in values])
         ax.grid(alpha=0.3)
-        ax.legend(title="controller", fontsize=8)
+        ax.legend(title=table.legend_title(), fontsize=8, title_fontsize=8)
     others = [a for a in table.axes if a != axis]
     spread = f"mean over {table.n_seeds()} seed(s)" + (
         f" and {', '.join(map(axis_label, others))}" if others else ""
@@ -268,7 +285,7 @@ def plot_heatmap(
                 if not np.isnan(grid[i, j]):
                     shade = (grid[i, j] - vmin) / (vmax - vmin)
                     dark = shade < 0.5 if metric.cmap == "viridis" else shade > 0.5
-                    ax.text(j, i, f"{grid[i, j]:.3g}", ha="center", va="center", fontsize=7,
+                    ax.text(j, i, fmt_num(grid[i, j]), ha="center", va="center", fontsize=7,
                             color="white" if dark else "black")  # fmt: skip
                 elif (rv, cv) in failed_cells and (rv, cv) not in ok_cells:
                     ax.text(j, i, "failed", ha="center", va="center", fontsize=7, color="#aa0000")
@@ -300,7 +317,8 @@ def plot_sweep_energy_per_hour(table: SweepTable, path: Path) -> Path | None:
             padded = np.array([v + [np.nan] * (n_hours - len(v)) for v in sums[c]], dtype=float)
             per_hour[c] = list(np.nanmean(padded, axis=0))
     return bars_per_hour(per_hour, table.sweep.get("start_hour"), table.sweep.get("duration_s"), path,
-                         f"{table.name}: energy per hour of the night (mean over {len(table.ok) // max(1, len(per_hour))} points)")  # fmt: skip
+                         f"{table.name}: energy per hour of the night (mean over {len(table.ok) // max(1, len(per_hour))} points)",
+                         legend_note=table.objects_note())  # fmt: skip
 
 
 def plot_sweep_lag_cdf(table: SweepTable, path: Path, notes: list[str]) -> Path | None:
@@ -312,7 +330,9 @@ def plot_sweep_lag_cdf(table: SweepTable, path: Path, notes: list[str]) -> Path 
         objects = table.folder / "points" / pid / "objects.csv"
         if objects.exists():
             found += 1
-            passages += read_passages(objects)
+            for p in read_passages(objects):
+                p["source"] = pid  # object ids restart at every point: count objects per point
+                passages.append(p)
     if not found:
         notes.append(
             "lag_cdf.png skipped: the points' objects.csv were not kept (save_objects: false)"

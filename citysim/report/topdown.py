@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Polygon, Rectangle
@@ -90,14 +91,45 @@ def plot_topdown(
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
     ax.set_facecolor("#c9d7b8")  # verge
-    x0, x1 = 0.0, street.length_m
+    # layers in drawing order; each sets its own zorder, so the order only matters for ties
+    _draw_sidewalks(ax, street)
+    _draw_lanes(ax, street)
+    _draw_scenery(ax, street)
+    _draw_cameras(ax, cameras)
+    _draw_lamps(ax, street, y_lo)
+    if tracks:
+        _draw_tracks(ax, fig, tracks)
 
+    ax.set_xlim(-5.0, street.length_m + 5.0)
+    ax.set_ylim(y_lo, y_hi)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x along the street (m)")
+    ax.set_ylabel("y across (m)")
+    ax.set_title(
+        f"Street {street.length_m:.0f} m, {len(street.lamps)} lamps, {len(cameras)} cameras"
+    )
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, format="png")
+    return path
+
+
+def _draw_sidewalks(ax: Axes, street: Street) -> None:
     for sw in street.sidewalks:
         ax.add_patch(
             Rectangle(
-                (x0, sw.y_center_m - sw.width_m / 2), x1 - x0, sw.width_m, color="#d9d4cc", zorder=1
+                (0.0, sw.y_center_m - sw.width_m / 2),
+                street.length_m,
+                sw.width_m,
+                color="#d9d4cc",
+                zorder=1,
             )
         )
+
+
+def _draw_lanes(ax: Axes, street: Street) -> None:
+    """Lanes with direction arrows, and the line between neighbours (dashed: same direction)."""
+    x0, x1 = 0.0, street.length_m
     lanes = sorted(street.lanes, key=lambda lane: lane.y_center_m)
     for lane in lanes:
         ax.add_patch(
@@ -122,6 +154,8 @@ def plot_topdown(
         style = "--" if a.direction == b.direction else "-"
         ax.plot([x0, x1], [y_line, y_line], style, color="white", lw=1.0, zorder=2)
 
+
+def _draw_scenery(ax: Axes, street: Street) -> None:
     for obj in street.scenery:
         colour = SCENERY_COLOURS.get(obj.kind, "#999999")
         if obj.kind == "tree":
@@ -141,6 +175,9 @@ def plot_topdown(
                 )
             )
 
+
+def _draw_cameras(ax: Axes, cameras: Sequence[CameraModel]) -> None:
+    """Each camera's ground footprint, and a triangle at its pole pointing where it looks."""
     for cam in cameras:
         poly = camera_footprint_m(cam)
         if len(poly) >= 3:
@@ -158,50 +195,41 @@ def plot_topdown(
             [cam.x_m], [cam.y_m], marker=(3, 0, cam.yaw_deg - 90.0), color="#c79100", ms=9, zorder=6
         )
 
-    if street.lamps:
-        lx = [lamp.x_m for lamp in street.lamps]
-        ly = [lamp.y_m for lamp in street.lamps]
-        ax.scatter(
-            lx,
-            ly,
-            marker="*",
-            s=140,
-            color="#ffeb3b",
-            edgecolors="black",
-            linewidths=0.6,
-            zorder=7,
-            label="lamp",
-        )
-        for lamp in street.lamps:
-            ax.plot([lamp.zone_start_m, lamp.zone_end_m], [y_lo + 1.0, y_lo + 1.0], lw=3, zorder=5)
-            ax.annotate(
-                str(lamp.index),
-                (lamp.x_m, lamp.y_m),
-                xytext=(4, 4),
-                textcoords="offset points",
-                fontsize=7,
-            )
 
-    if tracks:
-        colours = fig.colormaps["tab10"] if hasattr(fig, "colormaps") else None
-        for k, (object_id, xy) in enumerate(sorted(tracks.items())):
-            pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-            if len(pts) == 0:
-                continue
-            colour = colours(k % 10) if colours is not None else None
-            ax.plot(pts[:, 0], pts[:, 1], "-", lw=1.2, color=colour, zorder=8)
-            ax.plot(pts[0, 0], pts[0, 1], "o", ms=3, color=colour, zorder=8)
-            ax.annotate(str(object_id), pts[-1], fontsize=6, color=colour, zorder=8)
-
-    ax.set_xlim(x0 - 5.0, x1 + 5.0)
-    ax.set_ylim(y_lo, y_hi)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x along the street (m)")
-    ax.set_ylabel("y across (m)")
-    ax.set_title(
-        f"Street {street.length_m:.0f} m, {len(street.lamps)} lamps, {len(cameras)} cameras"
+def _draw_lamps(ax: Axes, street: Street, y_lo: float) -> None:
+    """Lamps as stars with their index, and each lamp's zone as a bar along the bottom edge."""
+    if not street.lamps:
+        return
+    ax.scatter(
+        [lamp.x_m for lamp in street.lamps],
+        [lamp.y_m for lamp in street.lamps],
+        marker="*",
+        s=140,
+        color="#ffeb3b",
+        edgecolors="black",
+        linewidths=0.6,
+        zorder=7,
+        label="lamp",
     )
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, format="png")
-    return path
+    for lamp in street.lamps:
+        ax.plot([lamp.zone_start_m, lamp.zone_end_m], [y_lo + 1.0, y_lo + 1.0], lw=3, zorder=5)
+        ax.annotate(
+            str(lamp.index),
+            (lamp.x_m, lamp.y_m),
+            xytext=(4, 4),
+            textcoords="offset points",
+            fontsize=7,
+        )
+
+
+def _draw_tracks(ax: Axes, fig: Figure, tracks: Mapping[int, np.ndarray]) -> None:
+    """Each object's path, a dot where it starts and its id where it ends."""
+    colours = fig.colormaps["tab10"] if hasattr(fig, "colormaps") else None
+    for k, (object_id, xy) in enumerate(sorted(tracks.items())):
+        pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        if len(pts) == 0:
+            continue
+        colour = colours(k % 10) if colours is not None else None
+        ax.plot(pts[:, 0], pts[:, 1], "-", lw=1.2, color=colour, zorder=8)
+        ax.plot(pts[0, 0], pts[0, 1], "o", ms=3, color=colour, zorder=8)
+        ax.annotate(str(object_id), pts[-1], fontsize=6, color=colour, zorder=8)

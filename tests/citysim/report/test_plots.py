@@ -1,7 +1,7 @@
 """Planner plots and the HTML report: real PNGs with the data in them, one self-contained page.
 
-The run folder comes from a real ``run_comparison`` of a tiny scenario; the
-camera height x tilt heatmaps are checked on a results table written through
+The run folder comes from a real ``run_comparison`` of a tiny scenario (``run_copy`` of
+conftest.py); the camera height x tilt heatmaps are checked on a results table written through
 ``ResultsFile`` with figures that vary over the grid in a known way.
 """
 
@@ -16,29 +16,12 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.config.scenario import scenario_from_mapping
-from citysim.report.run_plots import PlotError, plot_run, plot_sweep
 from citysim.report.common import CONTROLLER_COLORS, axis_label, clock_label
 from citysim.report.html import best_settings, write_report
-from citysim.sim.compare import run_comparison
+from citysim.report.run_plots import PlotError, plot_run
+from citysim.report.sweep_plots import plot_sweep
 from citysim.sweep.results import ResultsFile, flatten_summary
 from citysim.sweep.spec import point_id
-from tests.citysim.streets import two_way_street
-
-REPO = Path(__file__).resolve().parents[2]
-SCENARIO = {
-    "name": "tiny_plots",
-    "seed": 11,
-    "duration_s": 20,
-    "street": two_way_street(60),
-    "lamps": {
-        "count": 2, "spacing_m": 30, "first_x_m": 15, "y_m": 6.2, "pole_height_m": 5.5,
-        "camera": {"file": str(REPO / "scenarios" / "cameras" / "scene_a.yaml"), "tilt_deg": 15},
-    },
-    "traffic": {"classes": {"pedestrian": {"rate_per_hour": 500, "crossing_fraction": 0},
-                            "vehicle": {"rate_per_hour": 300}}},
-    "controllers": ["always_on", {"name": "pir", "hold_s": 4}],
-}  # fmt: skip
 
 
 def rgb(path: Path) -> np.ndarray:
@@ -74,14 +57,8 @@ def assert_real_plot(path: Path) -> np.ndarray:
     return image
 
 
-@pytest.fixture(scope="module")
-def run_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("run") / "run"
-    run_comparison(scenario_from_mapping(SCENARIO), out_dir=out)
-    return out
-
-
-def test_plot_run_draws_energy_levels_and_lag(run_dir):
+def test_plot_run_draws_energy_levels_and_lag(run_copy):
+    run_dir = run_copy
     summary = json.loads((run_dir / "summary.json").read_text())
     assert summary["controllers"]["pir"]["savings_vs_always_on"] > 0
     paths = plot_run(run_dir)
@@ -110,7 +87,8 @@ def test_plot_run_draws_energy_levels_and_lag(run_dir):
     assert heights["pir"] / heights["always_on"] == pytest.approx(expected, abs=0.03)
 
 
-def test_run_report_embeds_every_plot(run_dir):
+def test_run_report_embeds_every_plot(run_copy):
+    run_dir = run_copy
     report = write_report(run_dir)
     html = report.read_text()
     uris = re.findall(r'<img alt="([^"]+)" src="data:image/png;base64,([^"]+)"', html)
