@@ -9,10 +9,13 @@ from __future__ import annotations
 
 import re
 
+from citysim.report.frontier import HOW_TO_READ
+
 __all__ = ["caption_for"]
 
 #: file name -> (short title, how to read it)
 CAPTIONS: dict[str, tuple[str, str]] = {
+    "frontier.png": ("Savings against darkness: the planner's headline", HOW_TO_READ),
     "energy.png": (
         "Energy per controller",
         "Each bar is the energy one controller drew over the whole run, in kWh: the solid part is "

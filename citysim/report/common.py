@@ -56,6 +56,7 @@ CLASS_COLORS = {
 #: Fixed colours for the registered controllers, so every plot of a project agrees.
 CONTROLLER_COLORS = {
     "always_on": "#7f7f7f",
+    "oracle": "#000000",
     "schedule": "#bcbd22",
     "pir": "#ff7f0e",
     "threshold_5": "#8c564b",
@@ -63,6 +64,7 @@ CONTROLLER_COLORS = {
     "detector": "#1f77b4",
     "detector_confirmed": "#2ca02c",
     "detector_network": "#17becf",
+    "detector_located": "#d62728",
 }
 _SPARE_COLORS = ("#9467bd", "#d62728", "#393b79", "#637939", "#8c6d31", "#843c39")
 

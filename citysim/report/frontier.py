@@ -9,9 +9,8 @@ controller can save with everyone lit. For a sweep, each controller draws one po
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
-from citysim.report.common import controller_color, plt, save
+from citysim.report.common import controller_color, plt, warn_few_objects
 
 #: The sentence a planner reads beside the plot.
 HOW_TO_READ = (
@@ -33,18 +32,20 @@ def _axes(title: str):
     return fig, ax
 
 
-def _finish(fig, ax, points: Sequence[tuple[float, float]], path: Path) -> Path:
+def _finish(fig, ax, points: Sequence[tuple[float, float]], legend_title: str):
     xs = [x for x, _ in points] + [1.0]
     ys = [y for _, y in points] + [0.0]
     ax.set_xlim(min(xs) - 0.05, 1.02)
     ax.set_ylim(min(0.0, min(ys)) - 0.02, max(ys) + 0.08)
     ax.annotate("ideal", (1.0, max(ys) + 0.06), ha="right", va="top", fontsize=8, color="#555")
-    ax.legend(fontsize=7, loc="lower left")
-    return save(fig, path)
+    ax.legend(fontsize=7, loc="lower left", title=legend_title or None, title_fontsize=7)
+    return fig
 
 
-def plot_frontier(controllers: Mapping[str, Mapping], path: Path, title: str = "savings vs darkness") -> Path | None:
-    """One point per controller of a run (summary.json's ``controllers``); None without figures."""
+def frontier_figure(controllers: Mapping[str, Mapping], title: str = "savings vs darkness",
+                    n_objects: int | None = None):  # fmt: skip
+    """One point per controller of a run (summary.json's ``controllers``); None without figures.
+    ``n_objects`` (the run's objects) goes in the legend, with a warning when they are few."""
     points = {name: (c.get("lit_on_entry_rate"), c.get("savings_vs_always_on")) for name, c in controllers.items()}
     points = {n: p for n, p in points.items() if p[0] is not None and p[1] is not None}
     if not points:
@@ -56,10 +57,11 @@ def plot_frontier(controllers: Mapping[str, Mapping], path: Path, title: str = "
         ax.scatter([x], [y], s=90 if oracle else 45, marker="*" if oracle else "o",
                    color="black" if oracle else controller_color(name, order), label=name, zorder=3)  # fmt: skip
         ax.annotate(name, (x, y), textcoords="offset points", xytext=(5, 4), fontsize=7)
-    return _finish(fig, ax, list(points.values()), path)
+    warn_few_objects(fig, n_objects)
+    return _finish(fig, ax, list(points.values()), "" if n_objects is None else f"run: n={n_objects} objects")
 
 
-def plot_sweep_frontier(rows: Sequence[Mapping[str, str]], path: Path) -> Path | None:
+def sweep_frontier_figure(rows: Sequence[Mapping[str, str]]):
     """One point per controller and sweep setting (results.csv rows with status ok)."""
     by_controller: dict[str, list[tuple[float, float]]] = {}
     for row in rows:
@@ -78,4 +80,4 @@ def plot_sweep_frontier(rows: Sequence[Mapping[str, str]], path: Path) -> Path |
         ax.scatter([p[0] for p in pts], [p[1] for p in pts], s=60 if oracle else 25, marker="*" if oracle else "o",
                    color="black" if oracle else controller_color(name, order), alpha=0.8,
                    label=f"{name} (n={len(pts)})", zorder=3)  # fmt: skip
-    return _finish(fig, ax, [p for pts in by_controller.values() for p in pts], path)
+    return _finish(fig, ax, [p for pts in by_controller.values() for p in pts], "n = sweep settings")

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from citysim.report.frontier import frontier_figure
 from citysim.report.common import (
     CLASS_COLORS,
     TARGET_CLASSES,
@@ -51,7 +52,7 @@ from citysim.report.runfacts import RunFacts, load_summary, read_passages, run_f
 __all__ = ["RUN_PLOTS", "PlotError", "load_summary", "plot_run", "read_passages"]
 
 #: File names of the run plots, in the order the report shows them.
-RUN_PLOTS = ("energy.png", "energy_per_hour.png", "lamp_levels.png", "lag_cdf.png")
+RUN_PLOTS = ("frontier.png", "energy.png", "energy_per_hour.png", "lamp_levels.png", "lag_cdf.png")
 #: Lamps shown in lamp_levels.png, and the longest stretch of time shown (s).
 LEVEL_PLOT_LAMPS = 3
 LEVEL_PLOT_WINDOW_S = 600.0
@@ -80,7 +81,10 @@ def plot_run(run_dir: str | Path) -> list[Path]:
     facts = run_facts(run_dir, summary, passages)
     if facts.start_hour is None:
         notes.append(f"time axes in run seconds, not clock time: {facts.scenario_note}")
-    paths = [plot_energy(summary, facts, plot_dir / "energy.png")]
+    frontier = frontier_figure(summary["controllers"], f"{summary.get('scenario', '')}: savings vs darkness",
+                               facts.objects)  # fmt: skip
+    paths = [save(frontier, plot_dir / "frontier.png")] if frontier else []
+    paths.append(plot_energy(summary, facts, plot_dir / "energy.png"))
     paths.append(plot_energy_per_hour(summary, facts, plot_dir / "energy_per_hour.png"))
     levels = plot_lamp_levels(run_dir, summary, passages, facts, plot_dir / "lamp_levels.png", notes)
     paths += [levels] if levels else []

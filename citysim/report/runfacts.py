@@ -187,12 +187,9 @@ def _schedule_reason(facts: RunFacts, name: str) -> str | None:
     spec = _controller_spec(facts, name)
     if spec is None or spec.name != "schedule" or facts.start_hour is None:
         return None
-    from citysim.control.controllers import ControlContext, Schedule
+    from citysim.control.clock import ScheduleSteps
 
-    ctx = ControlContext(street=None, lamps=[], hold_s=0.0, frame_period_s=1.0, rng=None,
-                         dim_level=facts.scenario.lamps.luminaire.dim_level,
-                         start_hour=facts.start_hour, spec=spec)  # fmt: skip
-    schedule = Schedule(ctx)
+    schedule = ScheduleSteps.of(spec, facts.scenario.lamps.luminaire.dim_level)
     # the level in force at each minute of the window (steps start on clock hours or fractions)
     minutes = range(0, int(facts.duration_s // 60) + 1)
     levels = {schedule.level_at_hour((facts.start_hour + m / 60.0) % 24.0) for m in minutes}

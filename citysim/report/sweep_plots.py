@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from citysim.report.frontier import sweep_frontier_figure
 from citysim.report.common import (
     PlotError,
     axis_label,
@@ -184,6 +185,8 @@ def plot_sweep(sweep_dir: str | Path) -> list[Path]:
                 notes.append(f"heatmap_{key}.png skipped: no controller reports {metric.title}")
             else:
                 paths.append(path)
+    frontier = sweep_frontier_figure(table.ok)
+    paths += [save(frontier, plot_dir / "frontier.png")] if frontier else []
     energy = plot_sweep_energy_per_hour(table, plot_dir / "energy_per_hour.png")
     paths += [energy] if energy else []
     lag = plot_sweep_lag_cdf(table, plot_dir / "lag_cdf.png", notes)

@@ -1,0 +1,38 @@
+"""The frontier: one point per controller at (lit on entry, savings), the oracle marked."""
+
+import numpy as np
+
+from citysim.report.common import plt
+from citysim.report.frontier import frontier_figure, sweep_frontier_figure
+
+CONTROLLERS = {
+    "always_on": {"controller": "always_on", "lit_on_entry_rate": 1.0, "savings_vs_always_on": 0.0},
+    "oracle": {"controller": "oracle", "lit_on_entry_rate": 1.0, "savings_vs_always_on": 0.45},
+    "pir": {"controller": "pir", "lit_on_entry_rate": 0.2, "savings_vs_always_on": 0.55},
+    "nothing_yet": {"controller": "detector", "lit_on_entry_rate": None, "savings_vs_always_on": 0.3},
+}
+
+
+def test_each_controller_is_one_point_where_its_figures_say():
+    fig = frontier_figure(CONTROLLERS, n_objects=12)
+    (ax,) = fig.axes
+    points = {c.get_label(): c.get_offsets().data[0].tolist() for c in ax.collections}
+    assert points == {"always_on": [1.0, 0.0], "oracle": [1.0, 0.45], "pir": [0.2, 0.55]}
+    assert ax.get_legend().get_title().get_text() == "run: n=12 objects"
+    assert any(t.get_text().startswith("Few objects") for t in fig.texts)  # 12 objects are few
+    assert ax.get_xlim()[1] >= 1.0  # the ideal corner is in view
+    plt.close(fig)
+
+
+def test_a_sweep_draws_one_point_per_setting_and_skips_failed_rows():
+    rows = [
+        {"controller": "pir", "status": "ok", "lit_on_entry_rate": "0.3", "savings_vs_always_on": "0.5"},
+        {"controller": "pir", "status": "ok", "lit_on_entry_rate": "0.4", "savings_vs_always_on": "0.4"},
+        {"controller": "pir", "status": "failed", "lit_on_entry_rate": "", "savings_vs_always_on": ""},
+    ]
+    fig = sweep_frontier_figure(rows)
+    (collection,) = fig.axes[0].collections
+    assert np.allclose(collection.get_offsets().data, [[0.3, 0.5], [0.4, 0.4]])
+    assert collection.get_label() == "pir (n=2)"
+    plt.close(fig)
+    assert sweep_frontier_figure(rows[2:]) is None
