@@ -14,7 +14,7 @@ from citysim.sim.night import build_night
 from detector.general_model import default_model
 from detector.detector import Detector
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 def test_detector_finds_fully_visible_pedestrians_within_25_m():

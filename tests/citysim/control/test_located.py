@@ -9,7 +9,7 @@ from citysim.sim.loop import build_controller, deliver_messages
 from citysim.sim.night import build_night
 from detector.detector import Detection
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 def confirmed_detection(controller, lamp: int, box_px, frames: int = 6) -> Detection:

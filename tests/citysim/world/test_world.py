@@ -15,7 +15,7 @@ from citysim.world.traffic import start_traffic
 from citysim.world.physics import Leg, Route, World, physics_process
 from citysim.world.geometry import oriented_overlaps
 
-SUBURBAN = Path(__file__).resolve().parents[2] / "scenarios" / "suburban_night.yaml"
+SUBURBAN = Path(__file__).resolve().parents[3] / "scenarios" / "suburban_night.yaml"
 BUSY = 5.0  # traffic multiplier over the suburban weeknight
 DT_S = 0.25  # coarse physics step: the behaviour must hold at 4 Hz too
 

@@ -10,7 +10,7 @@ import pytest
 
 from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from citysim.report.topdown import FOOTPRINT_RANGE_M, camera_footprint_m, plot_topdown
-from tests.citysim.test_render import PINHOLE as CAMERA
+from tests.citysim.render.test_camera import PINHOLE as CAMERA
 
 
 def street() -> Street:

@@ -13,7 +13,7 @@ from citysim.config.traffic import PedestrianTraffic, VehicleTraffic
 from citysim.world.street import build_street
 from citysim.world.traffic import arrivals, draw_arrival, start_traffic
 
-SUBURBAN = Path(__file__).resolve().parents[2] / "scenarios" / "suburban_night.yaml"
+SUBURBAN = Path(__file__).resolve().parents[3] / "scenarios" / "suburban_night.yaml"
 
 # Table 1 of the paper (width, height, depth), and the brief's fox/dog-size animal.
 TABLE_1 = {

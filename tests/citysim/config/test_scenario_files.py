@@ -9,7 +9,7 @@ from citysim.control.registry import CONTROLLERS
 from citysim.world.street import build_street
 from detector.camera import CameraModel
 
-ROOT = Path(__file__).resolve().parents[1] / "scenarios"
+ROOT = Path(__file__).resolve().parents[3] / "scenarios"
 SCENARIOS = sorted(ROOT.glob("*.yaml"))
 CAMERAS = sorted((ROOT / "cameras").glob("*.yaml"))
 

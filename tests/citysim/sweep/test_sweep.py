@@ -26,7 +26,7 @@ from citysim.sweep.runner import SweepError, load_sweep, run_sweep
 from citysim.sweep.spec import point_id
 from tests.citysim.streets import two_way_street
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 CAMERA = REPO / "scenarios" / "cameras" / "scene_a.yaml"
 TIMING_COLUMNS = ("finished_at", "wall_s")
 

@@ -11,7 +11,7 @@ from citysim.world.agents import MAX_SPEED_MPS
 from citysim.config.scenario import ScenarioError, load_scenario, override, scenario_from_mapping
 from citysim.world.street import build_street
 
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
 SUBURBAN = SCENARIOS / "suburban_night.yaml"
 
 

@@ -15,7 +15,7 @@ import pytest
 from citysim.config.scenario import ControllerSpec, load_scenario, override
 from citysim.sim.loop import run_controller
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope="module")

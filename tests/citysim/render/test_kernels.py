@@ -15,7 +15,7 @@ from citysim.render.canvas import Z_NEAR_M
 from citysim.render.kernels import SUBPIXEL_BITS, fill_ranks, label_stats
 from citysim.render.models import agent_shape
 from citysim.render.spots import add_ground_spots, spot_class
-from tests.citysim.test_render import (
+from tests.citysim.render.test_camera import (
     EXACT_KW,
     settings,
     BARREL,

@@ -8,7 +8,7 @@ import pytest
 from citysim.config.scenario import ControllerSpec, scenario_from_mapping
 from citysim.sim.compare import resolve_controllers, with_savings_vs_oracle
 from citysim.sim.loop import run_controller
-from tests.citysim.test_sim import FPS, tiny_scenario
+from tests.citysim.sim.test_loop import FPS, tiny_scenario
 
 
 def test_oracle_lights_from_one_ramp_before_entry_until_exit_plus_hold():
