@@ -52,6 +52,7 @@ def is_real_plot(path: Path) -> bool:
     return img is not None and img.shape[0] > 100 and np.unique(img.reshape(-1, 3), axis=0).shape[0] > 20
 
 
+@pytest.mark.slow
 def test_run_writes_summary_tables_and_plots(tmp_path):
     out = tmp_path / "run"
     assert main(["run", str(tiny(tmp_path)), "--out", str(out), "--no-progress", "--workers", "1"]) == 0

@@ -17,6 +17,8 @@ import pytest
 
 from detector.__main__ import detect_video
 
+pytestmark = pytest.mark.slow  # real simulation or footage: tens of seconds
+
 REPO = Path(__file__).resolve().parents[2]
 CLIPS = Path(os.environ.get("CITYSIM_REALCLIPS", REPO.parent / "shared" / "realclips"))
 CAMERAS = REPO / "scenarios" / "cameras"

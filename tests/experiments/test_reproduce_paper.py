@@ -32,6 +32,8 @@ from experiments.paper.scenes import (  # noqa: E402
 )
 from experiments.paper.reproduce import QUICK_BUDGET, main, reproduce  # noqa: E402
 
+pytestmark = pytest.mark.slow  # real simulation or footage: tens of seconds
+
 FRAME_PX = 320 * 240
 
 

@@ -13,6 +13,9 @@ from citysim.metrics.confusion import iou_matrix
 from citysim.sim.night import build_night
 from detector.general_model import default_model
 from detector.detector import Detector
+import pytest
+
+pytestmark = pytest.mark.slow  # real simulation or footage: tens of seconds
 
 REPO = Path(__file__).resolve().parents[3]
 

@@ -15,6 +15,8 @@ import pytest
 from citysim.config.scenario import ControllerSpec, load_scenario, override
 from citysim.sim.loop import run_controller
 
+pytestmark = pytest.mark.slow  # real simulation or footage: tens of seconds
+
 REPO = Path(__file__).resolve().parents[3]
 
 
