@@ -30,8 +30,8 @@ def _user_errors() -> tuple[type[BaseException], ...]:
 
 
 def cmd_run(args) -> int:
-    from citysim.sim.compare import default_workers, run_comparison
     from citysim.config.scenario import load_scenario, override
+    from citysim.sim.compare import default_workers, run_comparison
 
     scenario = load_scenario(args.scenario)
     updates = {}
@@ -67,8 +67,8 @@ def comparison_table(summary: dict) -> str:
 
 
 def cmd_render(args) -> int:
-    from citysim.report.clip import render_clip
     from citysim.config.scenario import load_scenario
+    from citysim.report.clip import render_clip
 
     scenario = load_scenario(args.scenario)
     stats = render_clip(scenario, args.lamp, args.duration, args.out, detect=args.detect, lamps_full=args.lamps_full,

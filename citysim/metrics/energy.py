@@ -23,8 +23,8 @@ from citysim.metrics.confusion import (
     greedy_match,
     iou_matrix,
 )
-from citysim.metrics.zones import DEFAULT_LOOKAHEAD_S, ZoneTracker
 from citysim.metrics.quantiles import QuantileSketch
+from citysim.metrics.zones import DEFAULT_LOOKAHEAD_S, ZoneTracker
 
 __all__ = [
     "CONFUSION_CLASSES",

@@ -36,13 +36,13 @@ import cv2
 import numpy as np
 
 from citysim.render import light
-from citysim.world.agents import AgentState
 from citysim.render.blur import MIN_BLUR_PX
 from citysim.render.canvas import Z_NEAR_M, BoxMinimum, Canvas, clip_solid_near
 from citysim.render.clusters import PaintFrame, clusters, composite
 from citysim.render.kernels import SUBPIXEL_BITS, agent_box, clear_boxes, fill_ranks, pose_parts
 from citysim.render.models import draw_models
 from citysim.render.outline import outline_tables
+from citysim.world.agents import AgentState
 from detector.shape_parts import VERTICES_PER_PART
 
 #: Clothes, paint and fur face the camera at varied angles; one mean incidence cosine.

@@ -18,11 +18,11 @@ from tqdm import tqdm
 
 from citysim.config.scenario import Scenario
 from citysim.render.camera import CameraRenderer
-from citysim.sim.loop import RunError, render_params_of, seed_streams
-from citysim.world.street import build_street
 from citysim.report.topdown import plot_topdown
-from citysim.world.traffic import start_traffic
+from citysim.sim.loop import RunError, render_params_of, seed_streams
 from citysim.world.physics import World
+from citysim.world.street import build_street
+from citysim.world.traffic import start_traffic
 from detector.draw import draw_boxes, draw_detections
 from detector.outdir import staged_output
 

@@ -29,7 +29,6 @@ from pathlib import Path
 
 import numpy as np
 
-from citysim.report.run_plots import bars_per_hour, plot_lag_cdf, read_passages
 from citysim.report.common import (
     PlotError,
     axis_label,
@@ -41,6 +40,7 @@ from citysim.report.common import (
     to_float,
     write_notes,
 )
+from citysim.report.run_plots import bars_per_hour, plot_lag_cdf, read_passages
 
 __all__ = ["SWEEP_METRICS", "SweepTable", "plot_sweep"]
 

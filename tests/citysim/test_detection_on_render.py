@@ -13,9 +13,9 @@ from citysim.config.scenario import load_scenario, override
 from citysim.metrics.confusion import iou_matrix
 from citysim.render.camera import CameraRenderer
 from citysim.sim.loop import render_params_of, seed_streams
+from citysim.world.physics import World
 from citysim.world.street import build_street
 from citysim.world.traffic import start_traffic
-from citysim.world.physics import World
 from detector.classifier import default_model
 from detector.detector import Detector
 

@@ -9,7 +9,6 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from citysim.world.agents import AgentState
 from citysim.control.lamps import Lamp, LuminaireSpec
 from citysim.metrics.energy import (
     CONFUSION_CLASSES,
@@ -18,6 +17,7 @@ from citysim.metrics.energy import (
     ZoneTracker,
     energy_summary,
 )
+from citysim.world.agents import AgentState
 from citysim.world.street import LampSite, Lane, Sidewalk, Street
 from detector.camera import CameraModel
 

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from citysim.config.scenario import scenario_from_mapping
-from citysim.report.run_plots import PlotError, plot_run, plot_sweep
 from citysim.report.common import CONTROLLER_COLORS, axis_label, clock_label
 from citysim.report.html import best_settings, write_report
+from citysim.report.run_plots import PlotError, plot_run, plot_sweep
 from citysim.sim.loop import run_comparison
 from citysim.sweep.results import ResultsFile, flatten_summary
 from citysim.sweep.spec import point_id

@@ -8,13 +8,13 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.world.agents import AgentState, MemberState
-from citysim.render.camera import CameraRenderer, RenderParams
-from experiments.bench.scene import bench_render
 from citysim.render.blur import _smear
+from citysim.render.camera import CameraRenderer, RenderParams
 from citysim.render.models import agent_shape
+from citysim.world.agents import AgentState, MemberState
 from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from detector.camera import CameraModel
+from experiments.bench.scene import bench_render
 
 PINHOLE = CameraModel(
     height_m=4.0,

@@ -10,9 +10,9 @@ import simpy
 
 from citysim.config.scenario import ControllerSpec, scenario_from_mapping
 from citysim.sim.loop import run_controller, seed_streams
+from citysim.world.physics import World
 from citysim.world.street import build_street
 from citysim.world.traffic import start_traffic
-from citysim.world.physics import World
 from tests.citysim.streets import two_way_street
 
 FPS = 15.0
