@@ -20,13 +20,16 @@ from pydantic import (
 )
 
 from citysim.config.base import FieldPathError, Spec
-from citysim.world.street import ROAD_STEP_M, VERGE_STEP_M
 from detector.camera import CameraModel
 
 #: Smallest lane that holds the widest car of Table 1 (1.8 m) with clearance.
 MIN_LANE_WIDTH_M = 2.5
 #: Crossings keep this far from the street ends, where agents enter.
 CROSSING_END_CLEARANCE_M = 10.0
+#: Walkers passing each other may step this far beyond a sidewalk's outer edge (verge), m.
+VERGE_STEP_M = 0.5
+#: ... and this far off the kerb into the road, m.
+ROAD_STEP_M = 1.0
 
 
 class LaneSpec(Spec):

@@ -23,9 +23,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from citysim.world.agents import AgentState
+from citysim.config.kinds import AGENT_KINDS
 from citysim.config.scenario import ControllerSpec, NeighboursAhead
 from citysim.control.lamps import Lamp
+from citysim.world.agents import AgentState
 from citysim.world.street import Street
 from detector.segment import Segmenter, SegmenterParams
 
@@ -351,14 +352,13 @@ class DetectorConfirmed(DetectorPerFrame):
 class DetectorNetwork(DetectorConfirmed):
     """Confirmed detections are messaged to the lamps ahead, so they are lit before the object arrives.
 
-    Class-aware: a vehicle lights more lamps ahead, and for longer, than a pedestrian. The direction of
-    travel comes from the detection's ground position over the last frames; when it is unknown both
-    neighbours are told. Notifications repeat every ``repeat_s`` while the object is seen.
+    Class-aware: a vehicle lights more lamps ahead than a pedestrian, held for its kind's hold_factor
+    (config.kinds; a car's half as long). The direction of travel comes from the detection's ground
+    position over the last frames; when it is unknown both neighbours are told. Notifications repeat
+    every ``repeat_s`` while the object is seen.
     """
 
     name = "detector_network"
-
-    HOLD_FACTOR = {"pedestrian": 1.0, "group": 1.0, "cyclist": 1.0, "vehicle": 0.5}
 
     def __init__(self, ctx):
         super().__init__(ctx)
@@ -409,7 +409,8 @@ class DetectorNetwork(DetectorConfirmed):
 
     def on_message(self, lamp_index, t_s, message):
         if message.kind == "light":
-            factor = self.HOLD_FACTOR.get(message.payload.get("cls", ""), 1.0)
+            kind = AGENT_KINDS.get(message.payload.get("cls", ""))  # a detector class: a kind's name
+            factor = kind.hold_factor if kind is not None else 1.0
             self.bank.trigger(lamp_index, t_s, hold_s=self.ctx.hold_s * factor)
 
 

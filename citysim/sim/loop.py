@@ -32,11 +32,11 @@ import simpy
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.controllers import CONTROLLERS, ControlContext
 from citysim.control.lamps import Lamp, LuminaireSpec, always_on_energy_j
-from citysim.metrics.energy import DetectionConfusion, ZoneTracker, energy_summary
 from citysim.control.network import LinkSpec, Network
+from citysim.metrics.energy import DetectionConfusion, ZoneTracker, energy_summary
+from citysim.world.physics import World
 from citysim.world.street import Street, build_street
 from citysim.world.traffic import start_traffic
-from citysim.world.physics import World
 
 if TYPE_CHECKING:
     from citysim.render.camera import CameraRenderer, RenderParams
@@ -207,7 +207,8 @@ def run_controller(
                          start_hour=scenario.start_hour, spec=spec, neighbours_ahead=net.neighbours_ahead)
     controller = controller_cls(ctx)
 
-    zones = ZoneTracker(street)
+    # the per-class figures list the detector's own classes always, other kinds when present
+    zones = ZoneTracker(street, required_level=dict.fromkeys(scenario.traffic.reported_kinds(), 1.0))
     confusion = DetectionConfusion()
     false_on = FalseOnTime(street, lum.dim_level)
     state = {"agents": []}

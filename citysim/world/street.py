@@ -13,16 +13,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from citysim.config.street import ROAD_STEP_M, VERGE_STEP_M
 from detector.camera import CameraModel
 
 if TYPE_CHECKING:
     from citysim.config.scenario import Scenario
     from citysim.config.street import ScenerySpec
 
-#: Walkers passing each other may step this far beyond a sidewalk's outer edge (verge), m.
-VERGE_STEP_M = 0.5
-#: ... and this far off the kerb into the road, m.
-ROAD_STEP_M = 1.0
 
 
 @dataclass(frozen=True)
