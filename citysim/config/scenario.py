@@ -20,9 +20,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import Field, ValidationError, create_model, field_validator, model_validator
 
 from citysim.config.base import FieldPathError, ScenarioError, Spec, describe_validation_error
+from citysim.config.kinds import AGENT_KINDS
 from citysim.config.street import LampsSpec, StreetSpec
 from citysim.config.traffic import TrafficSpec
 from detector.yamlfile import read_yaml_mapping
@@ -66,13 +67,14 @@ class EnvironmentSpec(Spec):
         return 1.0 if self.time_of_day == "day" else 0.0
 
 
-class NeighboursAhead(Spec):
-    """How many lamps ahead of a detected object a controller lights, per class."""
-
-    pedestrian: int = Field(default=1, ge=0, le=20)
-    group: int = Field(default=1, ge=0, le=20)
-    cyclist: int = Field(default=2, ge=0, le=20)
-    vehicle: int = Field(default=4, ge=0, le=20)
+#: How many lamps ahead of a detected object a controller lights, per class the detector
+#: reports (the kinds that are a detector class; defaults: ``AgentKind.lamps_ahead``).
+NeighboursAhead = create_model(
+    "NeighboursAhead", __base__=Spec, __module__=__name__,
+    __doc__="How many lamps ahead of a detected object a controller lights, per class.",
+    **{k.name: (int, Field(default=k.lamps_ahead, ge=0, le=20)) for k in AGENT_KINDS.values()
+       if k.is_target and k.name == k.detector_class},
+)  # fmt: skip
 
 
 class NetworkSpec(Spec):
@@ -239,7 +241,8 @@ class Scenario(Spec):
         if problem:
             raise FieldPathError(("lamps", "y_m"), problem)
         classes = self.traffic.classes
-        for spec in (classes.pedestrian, classes.group):
+        walkers = [s for s in classes.all() if AGENT_KINDS[s.kind].route == "sidewalk"]
+        for spec in walkers:
             if spec.rate_per_hour > 0 and not street.sidewalks:
                 raise FieldPathError(
                     ("traffic", "classes", spec.kind, "rate_per_hour"),
@@ -264,14 +267,15 @@ class Scenario(Spec):
                     f"must be at least one camera frame ({frame_s:.3f} s); got {c.hold_s}",
                 )
         for i, agent in enumerate(self.traffic.scripted):
-            paths = street.lanes if agent.cls in ("cyclist", "vehicle") else street.sidewalks
-            kind = "street.lanes" if agent.cls in ("cyclist", "vehicle") else "street.sidewalks"
+            road_user = AGENT_KINDS[agent.cls].road_user
+            paths = street.lanes if road_user else street.sidewalks
+            kind = "street.lanes" if road_user else "street.sidewalks"
             if agent.path >= len(paths):
                 raise FieldPathError(
                     ("traffic", "scripted", i, "path"),
                     f"{agent.cls} path {agent.path} does not exist; valid: 0..{len(paths) - 1} ({kind})",
                 )
-        for spec in (classes.cyclist, classes.vehicle):
+        for spec in (s for s in classes.all() if AGENT_KINDS[s.kind].road_user):
             if spec.rate_per_hour > 0 and not street.lanes:
                 raise FieldPathError(
                     ("traffic", "classes", spec.kind, "rate_per_hour"),

@@ -26,6 +26,10 @@ from detector.camera import CameraModel
 MIN_LANE_WIDTH_M = 2.5
 #: Crossings keep this far from the street ends, where agents enter.
 CROSSING_END_CLEARANCE_M = 10.0
+#: Walkers passing each other may step this far beyond a sidewalk's outer edge (verge), m.
+VERGE_STEP_M = 0.5
+#: ... and this far off the kerb into the road, m.
+ROAD_STEP_M = 1.0
 
 #: Walkers passing each other may step this far beyond a sidewalk's outer edge (verge), m.
 VERGE_STEP_M = 0.5

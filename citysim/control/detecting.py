@@ -7,6 +7,7 @@ from collections import deque
 
 import numpy as np
 
+from citysim.config.kinds import AGENT_KINDS
 from citysim.control.base import Controller
 from citysim.control.camera import BackgroundClock, LightChangeWatch
 
@@ -19,8 +20,8 @@ class DetectorPerFrame(Controller):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        from detector.general_model import default_model
         from detector.detector import Detector
+        from detector.general_model import default_model
 
         model = default_model()
         threshold = 0.5 if ctx.spec.target_threshold is None else ctx.spec.target_threshold
@@ -77,14 +78,13 @@ class DetectorConfirmed(DetectorPerFrame):
 class DetectorNetwork(DetectorConfirmed):
     """Confirmed detections are messaged to the lamps ahead, so they are lit before the object arrives.
 
-    Class-aware: a vehicle lights more lamps ahead, and for longer, than a pedestrian. The direction of
-    travel comes from the detection's ground position over the last frames; when it is unknown both
-    neighbours are told. Notifications repeat every ``repeat_s`` while the object is seen.
+    Class-aware: a vehicle lights more lamps ahead than a pedestrian, held for its kind's hold_factor
+    (config.kinds; a car's half as long). The direction of travel comes from the detection's ground
+    position over the last frames; when it is unknown both neighbours are told. Notifications repeat
+    every ``repeat_s`` while the object is seen.
     """
 
     name = "detector_network"
-
-    HOLD_FACTOR = {"pedestrian": 1.0, "group": 1.0, "cyclist": 1.0, "vehicle": 0.5}
 
     def __init__(self, ctx):
         super().__init__(ctx)
@@ -135,5 +135,6 @@ class DetectorNetwork(DetectorConfirmed):
 
     def on_message(self, lamp_index, t_s, message):
         if message.kind == "light":
-            factor = self.HOLD_FACTOR.get(message.payload.get("cls", ""), 1.0)
+            kind = AGENT_KINDS.get(message.payload.get("cls", ""))  # a detector class: a kind's name
+            factor = kind.hold_factor if kind is not None else 1.0
             self.bank.trigger(lamp_index, t_s, hold_s=self.ctx.hold_s * factor)

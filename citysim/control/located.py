@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from citysim.world.agents import MAX_SPEED_MPS
+from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
 from citysim.control.detecting import DetectorPerFrame
 from citysim.world.agents import AgentState

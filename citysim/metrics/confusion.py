@@ -13,12 +13,21 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from citysim.world.agents import TARGET_CLASSES
+from citysim.config.kinds import AGENT_KINDS, DETECTOR_CLASSES
 from citysim.control.lamps import check_number
 from citysim.metrics.collector import Collector
 
 #: Detector class order (detector.classes.CLASSES): rows/columns of ``confusion_5``.
-CONFUSION_CLASSES = ("noise", *TARGET_CLASSES)
+CONFUSION_CLASSES = DETECTOR_CLASSES
+#: The detector's target classes: passes are counted per class it should call them.
+_TARGET_DETECTOR_CLASSES = DETECTOR_CLASSES[1:]
+
+
+def scored_as(cls: str) -> str:
+    """The detector class a truth object of kind ``cls`` is scored as (its record's
+    ``detector_class``; an unknown kind is noise)."""
+    kind = AGENT_KINDS.get(cls)
+    return kind.detector_class if kind is not None else "noise"
 
 
 class TruthLike(Protocol):
@@ -86,7 +95,8 @@ class _Pass:
 class DetectionConfusion:
     """Per-frame detection quality against render ground truth, streamed.
 
-    Truth 'animal' (any class outside the targets) counts as 'noise'; a
+    Truth objects are scored as their kind's ``detector_class`` (an animal as 'noise', an
+    e-scooter as a 'cyclist'), passes too (``miss_rate_by_class``); a
     detection that matches no truth box is a noise region. A detection is a
     target if ``p_target >= target_threshold`` (the ``Detector`` rule); the
     5-class confusion uses its ``cls``. A *pass* is one object in view of one
@@ -110,7 +120,8 @@ class DetectionConfusion:
         self.tp = self.fp = self.fn = self.tn = 0
         self.frames = self.regions = self.noise_regions = 0
         self._passes: dict[int, dict[int, _Pass]] = {}
-        self._pass_counts = {c: [0, 0] for c in TARGET_CLASSES}  # class -> [eligible, missed]
+        # detector class -> [eligible, missed]
+        self._pass_counts = {c: [0, 0] for c in _TARGET_DETECTOR_CLASSES}
 
     @staticmethod
     def _index(cls: str, field_name: str) -> int:
@@ -128,7 +139,7 @@ class DetectionConfusion:
         t_s: float,
     ) -> None:
         """Count one frame of lamp ``lamp_index``'s camera at ``t_s`` (s)."""
-        truth_cls = [t.cls if t.cls in TARGET_CLASSES else "noise" for t in truth]
+        truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [self._index(d.cls, "detections.cls") for d in detections]
         det_target = [d.p_target >= self.target_threshold for d in detections]
         iou = iou_matrix([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections])

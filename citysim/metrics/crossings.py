@@ -26,8 +26,9 @@ OBJECTS_CSV_HEADER = [
 class CrossingsCollector(Collector):
     """Per object and lamp zone: entry, exit, lag to the required light, dark seconds."""
 
-    def __init__(self, street: Street, label: str, writer: csv.writer | None):
-        self.zones = ZoneTracker(street)
+    def __init__(self, street: Street, label: str, writer: csv.writer | None, kinds: Sequence[str] | None = None):
+        """``kinds``: the road-user kinds that need light in a zone (default: the detector's targets)."""
+        self.zones = ZoneTracker(street, None if kinds is None else dict.fromkeys(kinds, 1.0))
         self.label, self.writer = label, writer
 
     def _write_rows(self) -> None:

@@ -29,19 +29,18 @@ from typing import Any
 
 import numpy as np
 
-from citysim.world.agents import TARGET_CLASSES, AgentState
+from citysim.config.kinds import AGENT_KINDS, TARGET_KINDS
 from citysim.control.lamps import check_number
 from citysim.metrics.quantiles import QuantileSketch
+from citysim.world.agents import AgentState
 from citysim.world.street import Street
 
-#: Seconds of look-ahead per class. A driver needs the road lit about two
-#: seconds ahead (the two-second reaction/following rule: ~33 m at 60 km/h,
-#: near the stopping distance); a cyclist about one second. Walkers need light
-#: where they are.
-# A zone must be lit when an object enters it ("the lamps ahead lit before it arrives"). A
-# stricter stopping-sight look-ahead (a car needing light 1-2 s ahead of it) is available per
-# class, but no camera with the paper's 25 m range can meet it at the first lamp of a chain.
-DEFAULT_LOOKAHEAD_S = {"pedestrian": 0.0, "group": 0.0, "cyclist": 0.0, "vehicle": 0.0}
+#: Seconds of look-ahead per class (``AgentKind.lookahead_s``). A zone must be lit when an
+#: object enters it ("the lamps ahead lit before it arrives"), so every kind's is 0 s. A
+#: stricter stopping-sight look-ahead (a driver needing the road lit about two seconds
+#: ahead, ~33 m at 60 km/h; a cyclist about one) can be set per kind, but no camera with the
+#: paper's 25 m range can meet it at the first lamp of a chain.
+DEFAULT_LOOKAHEAD_S = {name: AGENT_KINDS[name].lookahead_s for name in TARGET_KINDS}
 
 _LEVEL_TOL = 1e-9  # a ramp that ends exactly at the required level counts as reaching it
 
@@ -97,7 +96,7 @@ class ZoneTracker:
     """Per object and lamp zone: entry, lag to the required light, dark seconds.
 
     ``required_level``: class -> lamp level (0..1) the class needs; only these
-    classes are tracked (default: 1.0 for every target class). ``lookahead_s``:
+    classes are tracked (default: 1.0 for every target kind). ``lookahead_s``:
     class -> seconds of look-ahead (default ``DEFAULT_LOOKAHEAD_S``).
     Call ``update`` every physics step, ``finish`` at the end, drain ``rows``.
     """
@@ -109,7 +108,7 @@ class ZoneTracker:
         lookahead_s: dict[str, float] | None = None,
     ) -> None:
         self.required_level = (
-            dict.fromkeys(TARGET_CLASSES, 1.0) if required_level is None else dict(required_level)
+            dict.fromkeys(TARGET_KINDS, 1.0) if required_level is None else dict(required_level)
         )
         for cls, level in self.required_level.items():
             check_number("ZoneTracker.required_level", cls, level, 0.0, 1.0)

@@ -1,8 +1,9 @@
 """Lights that move or switch: what agents carry, glare blobs, lamp heads.
 
-* ``BEAMS``: the light a lit agent (``AgentState.light_on``; vehicles and
-  cyclists carry headlights, pedestrians a flashlight) carries; its spot on
-  the ground is drawn by ``citysim.render.spots``.
+* ``BEAMS``: the lights agents carry, by name (``AgentKind.beam``: vehicles
+  carry headlights, cyclists a bike lamp, pedestrians a flashlight); a lit
+  agent (``AgentState.light_on``) shows its kind's, and its spot on the ground
+  is drawn by ``citysim.render.spots``.
 * The lamp itself, when it faces the camera, is a bright blob (a Gaussian of
   the lamp's apparent size plus glow) whose brightness falls with the square
   of its distance; from behind, vehicles show dim tail lights.
@@ -10,7 +11,7 @@
 * On a wet road (rain) every blob also has its reflection: a streak from the
   ground below the light down to the image of its mirror point under the road.
 
-Kinds are chosen by ``AgentState.cls`` from ``BEAMS``. Conventions: canvas
+An agent's beam is its kind's (``beam_of``). Conventions: canvas
 pixels (``citysim.render.canvas``), world frame of DESIGN.md, radiance in
 linear full-scale units; lamp offsets are (forward, left, up) m in the agent's
 frame.
@@ -25,6 +26,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
+from citysim.config.kinds import AGENT_KINDS
 from citysim.render.canvas import Canvas, roi_of
 from citysim.world.agents import AgentState
 
@@ -46,14 +48,25 @@ class BeamSpec:
     lamp_size_m: float
 
 
-#: AgentState.cls -> its light when ``light_on``.
+#: Carried lights by name (``AgentKind.beam``), shown when an agent's ``light_on``.
 BEAMS: dict[str, BeamSpec] = {
-    "vehicle": BeamSpec(
+    "headlights": BeamSpec(
         1.6, 9.0, 7.0, 1.2, 0.18, ((0.5, 0.35, 0.65), (0.5, -0.35, 0.65)), 300.0, 0.08, 0.18
     ),
-    "cyclist": BeamSpec(1.1, 4.0, 3.0, 0.6, 0.15, ((0.45, 0.0, 1.0),), 120.0, 0.05, 0.08),
-    "pedestrian": BeamSpec(0.9, 2.5, 1.6, 0.35, 0.12, ((0.3, -0.5, 1.0),), 60.0, 0.0, 0.06),
+    "bike_lamp": BeamSpec(1.1, 4.0, 3.0, 0.6, 0.15, ((0.45, 0.0, 1.0),), 120.0, 0.05, 0.08),
+    "flashlight": BeamSpec(0.9, 2.5, 1.6, 0.35, 0.12, ((0.3, -0.5, 1.0),), 60.0, 0.0, 0.06),
 }
+
+
+def beam_of(cls: str) -> BeamSpec | None:
+    """The light an agent of kind ``cls`` carries (None: none drawn, or an unknown kind)."""
+    kind = AGENT_KINDS.get(cls)
+    return None if kind is None or kind.beam is None else BEAMS[kind.beam]
+
+
+def shows_light(agent: AgentState) -> bool:
+    """Whether the agent's light is drawn: switched on, and its kind carries a beam."""
+    return agent.light_on and beam_of(agent.cls) is not None
 #: Street-lamp luminaire blob radiance x m^2 at level 1.
 LAMP_HEAD_GLARE = 500.0
 LAMP_HEAD_SIZE_M = 0.4
@@ -193,7 +206,7 @@ def agent_glare_sources(
     A lamp shines at the camera as cos^2 of the angle between its heading and
     the camera; from behind, vehicles show their tail lights (a fraction).
     """
-    lit = [(a, BEAMS[a.cls]) for a in agents if a.light_on and a.cls in BEAMS]
+    lit = [(a, beam_of(a.cls)) for a in agents if shows_light(a)]
     if not lit:
         return np.zeros((0, 3)), np.zeros(0), np.zeros(0)
     rows = np.array(

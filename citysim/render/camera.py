@@ -44,17 +44,17 @@ from citysim.config.scenario import EnvironmentSpec
 from citysim.render.agents import AgentLighting, AgentPainter, DrawnAgent
 from citysim.render.background import ShadingInputs, StaticScene
 from citysim.render.beams import (
-    BEAMS,
     LAMP_HEAD_GLARE,
     LAMP_HEAD_SIZE_M,
     agent_glare_sources,
     glare,
+    shows_light,
 )
 from citysim.render.canvas import build_canvas
 from citysim.render.effects.common import EffectFrame
 from citysim.render.effects.registry import EFFECTS
 from citysim.render.kernels import label_stats
-from citysim.render.models import AGENT_MODELS, prepare_models
+from citysim.render.models import model_of, prepare_models
 from citysim.render.output import FrameOutput
 from citysim.render.spots import add_ground_spots, spot_reach
 from citysim.world.agents import AgentState
@@ -167,16 +167,13 @@ class CameraRenderer:
         if not agents:
             return [], []
         for a in agents:
-            if a.cls not in AGENT_MODELS:
-                raise ValueError(
-                    f"AgentState {a.object_id}: cls {a.cls!r} cannot be rendered; valid: {sorted(AGENT_MODELS)}"
-                )
+            model_of(a)  # ValueError naming the class if it cannot be rendered
         pos = np.array(
             [[a.x_m, a.y_m, 0.5 * a.height_m, a.length_m, a.width_m, a.height_m] for a in agents]
         )
         radius = 0.5 * np.linalg.norm(pos[:, 3:], axis=1) + 1.0  # + members' spread, walkers' limbs
         seen = self.canvas.spheres_in_view(pos[:, :3], radius)
-        lit = [a for a in agents if a.light_on and a.cls in BEAMS]
+        lit = [a for a in agents if shows_light(a)]
         spots = []
         if lit:
             shown = self.canvas.spheres_in_view(*spot_reach(lit))

@@ -1,7 +1,8 @@
 """Agent states -> the detector's 3D models (``detector.train.shapes``), posed for drawing.
 
-A registry maps ``AgentState.cls`` to how its model is keyed (everything but
-the pose) and built at the origin. The renderer caches models by key, with
+A registry maps each 3D model's name (a kind's ``AgentKind.shape``,
+``citysim.config.kinds``) to how its model is keyed (everything but the pose)
+and built at the origin. The renderer caches models by key, with
 gait phases rounded to PHASE_STEPS per cycle, together with each part's
 outline table (``citysim.render.outline``), and poses all agents in one
 vectorised rotation + translation (``draw_models``); ``agent_shape`` gives one
@@ -20,6 +21,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from citysim.config.kinds import AGENT_KINDS
 from citysim.render.outline import KnownTopology, model_topology
 from citysim.world.agents import AgentState
 from detector.train.shapes import (
@@ -71,7 +73,7 @@ def _group_key(a: AgentState, phase: PhaseMap) -> tuple:
     )
 
 
-#: AgentState.cls -> its 3D model (the detector's own shapes).
+#: Model name (``AgentKind.shape``) -> its 3D model (the detector's own shapes).
 AGENT_MODELS: dict[str, AgentModel] = {
     "pedestrian": AgentModel(
         lambda a, phase: ("pedestrian", a.width_m, a.height_m, a.length_m, phase(a.gait_phase_rad)),
@@ -93,11 +95,14 @@ AGENT_MODELS: dict[str, AgentModel] = {
 }
 
 
-def _model_of(agent: AgentState) -> AgentModel:
-    model = AGENT_MODELS.get(agent.cls)
+def model_of(agent: AgentState) -> AgentModel:
+    """The 3D model of the agent's kind; ValueError naming the class if it has none."""
+    kind = AGENT_KINDS.get(agent.cls)
+    model = None if kind is None else AGENT_MODELS.get(kind.shape)
     if model is None:
+        valid = sorted(k.name for k in AGENT_KINDS.values() if k.shape in AGENT_MODELS)
         raise ValueError(
-            f"AgentState {agent.object_id}: cls {agent.cls!r} cannot be rendered; valid: {sorted(AGENT_MODELS)}"
+            f"AgentState {agent.object_id}: cls {agent.cls!r} cannot be rendered; valid: {valid}"
         )
     return model
 
@@ -110,7 +115,7 @@ def _model_at_origin(key: tuple) -> Shape:
 def agent_shape(agent: AgentState, quantise_phase: bool = False) -> Shape:
     """The agent's 3D model at its pose (world frame). With ``quantise_phase`` the gait is the
     one the renderer draws (see PHASE_STEPS). ValueError naming the class if it is unknown."""
-    key = _model_of(agent).key(agent, quantised_phase if quantise_phase else _exact)
+    key = model_of(agent).key(agent, quantised_phase if quantise_phase else _exact)
     local = _model_at_origin(key) if quantise_phase else AGENT_MODELS[key[0]].build(key)
     return Shape(
         _place(local.corners_m, agent.x_m, agent.y_m, agent.heading_rad),
@@ -218,7 +223,7 @@ def draw_models(agents: Sequence[AgentState]) -> list[DrawModel]:
     ValueError naming the class for an unknown one."""
     out = []
     for a in agents:
-        maker = _model_of(a)
+        maker = model_of(a)
         key = maker.key(a, quantised_phase)
         model = _DRAW_MODELS.get(key)
         if model is None:

@@ -1,6 +1,6 @@
 """Headlight and flashlight spots on the ground ahead of lit agents.
 
-A lit agent (``AgentState.light_on``, a class in ``render_beams.BEAMS``)
+A lit agent (``AgentState.light_on``, a kind with a beam: ``render_beams.beam_of``)
 throws a spot on the ground ahead of it:
 ``E = peak * exp(-((f - centre)/sigma_f)^2) * exp(-(l / (sigma_l + spread * f))^2)``
 for ground points ``f`` m ahead of and ``l`` m beside its lamps' mean
@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from citysim.render.background import StaticScene
-from citysim.render.beams import BEAMS, BeamSpec
+from citysim.render.beams import BeamSpec, beam_of
 from citysim.render.kernels import add_spots as add_spot_cells
 from citysim.world.agents import AgentState
 
@@ -60,7 +60,10 @@ class SpotClass:
 
 @cache
 def spot_class(cls: str) -> SpotClass:
-    spec = BEAMS[cls]
+    """The spot of kind ``cls``'s beam."""
+    spec = beam_of(cls)
+    if spec is None:
+        raise ValueError(f"agent class {cls!r} carries no beam")
     lamps = np.array(spec.lamps_flz)
     f_far, half_w = spot_extent_m(spec)
     layout = (float(lamps[:, 0].mean()), float(lamps[:, 1].mean()), f_far, half_w)

@@ -21,6 +21,8 @@ matplotlib.use("Agg")  # files only: no display on a server or in a worker
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from citysim.config.kinds import AGENT_KINDS, TARGET_KINDS  # noqa: E402
+
 __all__ = [
     "CLASS_COLORS",
     "FEW_OBJECTS",
@@ -46,13 +48,9 @@ DPI = 110
 #: crossings (one more unlit crossing moves them by several points): plots and report say so.
 FEW_OBJECTS = 30
 WARNING_COLOR = "#b00000"
-TARGET_CLASSES = ("pedestrian", "group", "cyclist", "vehicle")
-CLASS_COLORS = {
-    "pedestrian": "#1f77b4",
-    "group": "#9467bd",
-    "cyclist": "#2ca02c",
-    "vehicle": "#d62728",
-}
+#: Kinds a run's per-class plots show (those present), in registry order, and their colours.
+TARGET_CLASSES = TARGET_KINDS
+CLASS_COLORS = {name: AGENT_KINDS[name].colour for name in TARGET_KINDS}
 #: Fixed colours for the registered controllers, so every plot of a project agrees.
 CONTROLLER_COLORS = {
     "always_on": "#7f7f7f",

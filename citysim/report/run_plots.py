@@ -29,7 +29,6 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from citysim.report.frontier import frontier_figure
 from citysim.report.common import (
     CLASS_COLORS,
     TARGET_CLASSES,
@@ -47,6 +46,7 @@ from citysim.report.common import (
     warn_few_objects,
     write_notes,
 )
+from citysim.report.frontier import frontier_figure
 from citysim.report.runfacts import RunFacts, load_summary, read_passages, run_facts
 
 __all__ = ["RUN_PLOTS", "PlotError", "load_summary", "plot_run", "read_passages"]

@@ -29,7 +29,6 @@ from pathlib import Path
 
 import numpy as np
 
-from citysim.report.frontier import sweep_frontier_figure
 from citysim.report.common import (
     PlotError,
     axis_label,
@@ -42,6 +41,7 @@ from citysim.report.common import (
     to_float,
     write_notes,
 )
+from citysim.report.frontier import sweep_frontier_figure
 from citysim.report.run_plots import bars_per_hour, plot_lag_cdf
 from citysim.report.runfacts import read_passages
 

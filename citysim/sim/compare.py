@@ -27,12 +27,11 @@ from tqdm import tqdm
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.registry import CONTROLLERS
 from citysim.metrics.crossings import OBJECTS_CSV_HEADER
-from citysim.world.coverage import camera_coverage
-from citysim.world.street import build_street
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.loop import check_controllers, controller_spec, run_controller
+from citysim.world.coverage import camera_coverage
+from citysim.world.street import build_street
 from detector.outdir import staged_output
-
 
 #: Every comparison holds these (savings are against always-on, and against the oracle's bound,
 #: measured on the same night), first, in this order.

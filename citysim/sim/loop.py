@@ -25,9 +25,9 @@ import numpy as np
 
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.base import ControlContext, Controller
-from citysim.control.registry import CONTROLLERS
 from citysim.control.lamps import Lamp
 from citysim.control.network import Network
+from citysim.control.registry import CONTROLLERS
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import ConfusionCollector
 from citysim.metrics.crossings import CrossingsCollector
@@ -120,7 +120,8 @@ def run_controller(
     controller = build_controller(night, spec)
     lamps, label = controller.ctx.lamps, spec.display_name
     collectors: list[Collector] = [
-        CrossingsCollector(night.street, label, objects_writer),
+        # the per-class figures list the detector's own classes always, other kinds when present
+        CrossingsCollector(night.street, label, objects_writer, scenario.traffic.reported_kinds()),
         FalseOnTime(night.street, controller.ctx.dim_level, night.physics_dt_s),
         ConfusionCollector(),
         EnergyCollector(lamps, controller.ctx.luminaire),

@@ -28,6 +28,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from citysim.config.kinds import TARGET_KINDS
 from citysim.config.scenario import ControllerSpec, Scenario, ScenarioError, load_scenario, override
 from detector.yamlfile import read_yaml_mapping
 
@@ -53,7 +54,7 @@ def _scale_traffic(scenario: Scenario, factor: float) -> dict[str, float]:
     classes = scenario.traffic.classes
     return {
         f"traffic.classes.{kind}.rate_per_hour": getattr(classes, kind).rate_per_hour * factor
-        for kind in ("pedestrian", "group", "cyclist", "vehicle")
+        for kind in TARGET_KINDS
     }
 
 

@@ -1,5 +1,7 @@
-"""Agent kinds (sizes, speeds, motion, drawing) and the per-instant snapshot.
+"""Drawing an agent's looks from its kind's record, and the per-instant snapshot.
 
+The kinds are data (``citysim.config.kinds.AGENT_KINDS``); each names a body recipe of
+``BODY_RECIPES`` here ("walker", "group", "rigid") that draws one agent's ``AgentTraits``.
 The world (``citysim.world.physics``) owns the pymunk bodies; each physics step it can
 hand out immutable ``AgentState`` snapshots. Renderers and metrics read those
 snapshots and never touch the physics.
@@ -18,10 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Classes the detector must light for (the paper's target group), plus noise.
-TARGET_CLASSES = ("pedestrian", "group", "cyclist", "vehicle")
-#: Classes the simulator can spawn that the detector must *not* light for.
-NON_TARGET_CLASSES = ("animal",)
+from citysim.config.kinds import AGENT_KINDS, AgentKind, kind_of
+from citysim.config.motion import DrawOptions
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class AgentState:
     """Where one agent is and what it looks like at one instant."""
 
     object_id: int
-    cls: str  # one of TARGET_CLASSES or NON_TARGET_CLASSES
+    cls: str  # a kind of citysim.config.kinds.AGENT_KINDS
     x_m: float  # centre of the ground footprint
     y_m: float
     heading_rad: float
@@ -55,85 +55,8 @@ class AgentState:
 
     @property
     def is_target(self) -> bool:
-        return self.cls in TARGET_CLASSES
-
-
-# --------------------------------------------------------------------------
-# Agent kinds: sizes (paper Table 1), speeds, motion parameters, drawing.
-# --------------------------------------------------------------------------
-KMH_PER_MPS = 3.6
-#: No simulated agent is ever faster than this (the paper's street scenes).
-MAX_SPEED_KMH = 60.0
-MAX_SPEED_MPS = MAX_SPEED_KMH / KMH_PER_MPS
-
-
-@dataclass(frozen=True)
-class SpeedDistribution:
-    """Desired (free-flow) speed of one agent, m/s.
-
-    Uniform on [min_mps, max_mps], or, when ``mean_mps`` and ``std_mps`` are
-    given, normal(mean, std) clipped to [min_mps, max_mps].
-    """
-
-    min_mps: float
-    max_mps: float
-    mean_mps: float | None = None
-    std_mps: float | None = None
-
-    def __post_init__(self) -> None:
-        if not 0.0 < self.min_mps <= self.max_mps <= MAX_SPEED_MPS + 1e-9:
-            raise ValueError(
-                f"speed range must satisfy 0 < min <= max <= {MAX_SPEED_MPS:.2f} m/s "
-                f"({MAX_SPEED_KMH:g} km/h), got min={self.min_mps} max={self.max_mps}"
-            )
-
-    def draw(self, rng: np.random.Generator) -> float:
-        if self.mean_mps is not None and self.std_mps is not None:
-            return float(
-                np.clip(rng.normal(self.mean_mps, self.std_mps), self.min_mps, self.max_mps)
-            )
-        return float(rng.uniform(self.min_mps, self.max_mps))
-
-
-@dataclass(frozen=True)
-class MotionParams:
-    """How an agent of one kind moves (the world's behaviour model reads these).
-
-    Longitudinal control is the Intelligent Driver Model (Treiber et al. 2000):
-    ``accel_mps2`` (a), ``comfort_decel_mps2`` (b), ``headway_s`` (T),
-    ``min_gap_m`` (s0); ``max_decel_mps2`` bounds braking. Lateral control picks
-    an offset within the path's band: ``lateral_speed_mps`` bounds sidestepping,
-    ``lateral_margin_m`` is the clearance kept to others when passing, and
-    ``horizon_s`` the look-ahead time used to score free space. ``yaw_rate_rps``
-    bounds how fast the body turns toward its direction of motion; ``max_tilt_rad``
-    how far it turns away from its path's direction while swerving (walkers and
-    animals sidestep facing forward: 0).
-    """
-
-    accel_mps2: float
-    comfort_decel_mps2: float
-    max_decel_mps2: float
-    headway_s: float
-    min_gap_m: float
-    lookahead_m: float
-    lateral_speed_mps: float
-    lateral_margin_m: float
-    horizon_s: float
-    yaw_rate_rps: float
-    max_tilt_rad: float = 0.0
-
-
-@dataclass(frozen=True)
-class DrawOptions:
-    """Per-scenario knobs for drawing one agent (from ``config`` traffic specs)."""
-
-    speed: SpeedDistribution | None = None  # None: the kind's default
-    running_fraction: float = 0.0  # walkers: share that run
-    running_speed: SpeedDistribution | None = None
-    light_fraction: float = 0.0  # flashlight (walkers) or headlight (cyclists, vehicles)
-    night: bool = True  # lights are only switched on at night
-    group_size: tuple[int, int] = (2, 4)
-    max_group_width_m: float = 3.0  # the path's room: wider groups walk in two rows
+        kind = AGENT_KINDS.get(self.cls)
+        return kind is not None and kind.is_target
 
 
 @dataclass(frozen=True)
@@ -157,19 +80,6 @@ class AgentTraits:
     members: tuple[MemberState, ...] = ()
 
 
-@dataclass(frozen=True)
-class AgentKind:
-    """One class of agent: Table 1 size ranges (m), default speed and motion."""
-
-    cls: str
-    width_m: tuple[float, float]
-    height_m: tuple[float, float]
-    length_m: tuple[float, float]
-    speed: SpeedDistribution
-    motion: MotionParams
-    draw: Callable[[AgentKind, np.random.Generator, DrawOptions], AgentTraits]
-
-
 def _uniform(rng: np.random.Generator, lo_hi: tuple[float, float]) -> float:
     return float(rng.uniform(lo_hi[0], lo_hi[1]))
 
@@ -181,9 +91,10 @@ def _draw_pedestrian(kind: AgentKind, rng: np.random.Generator, opt: DrawOptions
         _uniform(rng, kind.length_m),
     )
     running = bool(rng.random() < opt.running_fraction)
-    speed = (opt.running_speed or RUNNING_SPEED) if running else (opt.speed or kind.speed)
+    run_speed = opt.running_speed or kind.running_speed
+    speed = run_speed if running and run_speed is not None else (opt.speed or kind.speed)
     return AgentTraits(
-        cls=kind.cls,
+        cls=kind.name,
         width_m=width,
         height_m=height,
         length_m=step,
@@ -211,7 +122,7 @@ def _draw_group(kind: AgentKind, rng: np.random.Generator, opt: DrawOptions) -> 
     (``opt.max_group_width_m``) allows; otherwise members walk in rows with the
     least gap. The footprint (width_m x length_m) is symmetric about the centre.
     """
-    ped = AGENT_KINDS["pedestrian"]
+    ped = kind_of(kind.body.member or "pedestrian")
     n = int(rng.integers(opt.group_size[0], opt.group_size[1] + 1))
     widths = rng.uniform(*ped.width_m, size=n)
     heights = rng.uniform(*ped.height_m, size=n)
@@ -256,7 +167,7 @@ def _draw_group(kind: AgentKind, rng: np.random.Generator, opt: DrawOptions) -> 
     width = 2.0 * max(abs(m.left_m) + m.width_m / 2 for m in members)
     length = 2.0 * max(abs(m.forward_m) + m.length_m / 2 for m in members)
     return AgentTraits(
-        cls=kind.cls,
+        cls=kind.name,
         width_m=float(width),
         height_m=float(heights.max()),
         length_m=float(length),
@@ -267,135 +178,45 @@ def _draw_group(kind: AgentKind, rng: np.random.Generator, opt: DrawOptions) -> 
     )
 
 
-def _draw_rigid(stride_m: tuple[float, float]):
-    """Draw a cyclist / vehicle / animal: Table 1 box, speed, lights."""
+def _draw_rigid(kind: AgentKind, rng: np.random.Generator, opt: DrawOptions) -> AgentTraits:
+    """A rider, vehicle or animal: a box in its kind's ranges, speed, lights; its gait (crank,
+    wheel or legs) advances one cycle per ``kind.body.stride_m``."""
+    if kind.body.stride_m is None:
+        raise ValueError(f"kind {kind.name!r}: a 'rigid' body needs a stride_m range")
+    return AgentTraits(
+        cls=kind.name,
+        width_m=_uniform(rng, kind.width_m),
+        height_m=_uniform(rng, kind.height_m),
+        length_m=_uniform(rng, kind.length_m),
+        desired_speed_mps=(opt.speed or kind.speed).draw(rng),
+        stride_m=_uniform(rng, kind.body.stride_m),
+        light_on=opt.night and bool(rng.random() < opt.light_fraction),
+        gait_phase_rad=float(rng.uniform(0.0, 2.0 * math.pi)),
+    )
 
-    def draw(kind: AgentKind, rng: np.random.Generator, opt: DrawOptions) -> AgentTraits:
-        return AgentTraits(
-            cls=kind.cls,
-            width_m=_uniform(rng, kind.width_m),
-            height_m=_uniform(rng, kind.height_m),
-            length_m=_uniform(rng, kind.length_m),
-            desired_speed_mps=(opt.speed or kind.speed).draw(rng),
-            stride_m=_uniform(rng, stride_m),
-            light_on=opt.night and bool(rng.random() < opt.light_fraction),
-            gait_phase_rad=float(rng.uniform(0.0, 2.0 * math.pi)),
-        )
 
-    return draw
+BodyRecipe = Callable[[AgentKind, np.random.Generator, DrawOptions], AgentTraits]
 
-
-WALK_SPEED = SpeedDistribution(1.0, 1.8)
-RUNNING_SPEED = SpeedDistribution(2.5, 4.0)
-
-_WALKER_MOTION = MotionParams(
-    accel_mps2=1.0,
-    comfort_decel_mps2=1.5,
-    max_decel_mps2=4.0,
-    headway_s=0.6,
-    min_gap_m=0.35,
-    lookahead_m=12.0,
-    lateral_speed_mps=0.6,
-    lateral_margin_m=0.12,
-    horizon_s=3.0,
-    yaw_rate_rps=4.0,
-)
-
-#: The agent kinds by class name. Sizes: paper Table 1 (animals: fox/dog size,
-#: not in the paper). Speeds: walking 1.0-1.8 m/s (running 2.5-4), cycling
-#: 3-8 m/s, driving 30-60 km/h on a residential street.
-AGENT_KINDS: dict[str, AgentKind] = {
-    "pedestrian": AgentKind(
-        "pedestrian",
-        (0.3, 0.64),
-        (1.15, 2.0),
-        (0.3, 0.79),
-        WALK_SPEED,
-        _WALKER_MOTION,
-        _draw_pedestrian,
-    ),
-    "group": AgentKind(
-        "group",
-        (1.2, 3.0),
-        (1.5, 2.0),
-        (0.3, 0.79),
-        SpeedDistribution(1.0, 1.6),
-        _WALKER_MOTION,
-        _draw_group,
-    ),
-    "cyclist": AgentKind(
-        "cyclist",
-        (0.3, 0.64),
-        (1.5, 1.9),
-        (1.5, 1.7),
-        SpeedDistribution(3.0, 8.0),
-        MotionParams(
-            accel_mps2=1.0,
-            comfort_decel_mps2=2.0,
-            max_decel_mps2=5.0,
-            headway_s=1.0,
-            min_gap_m=1.0,
-            lookahead_m=40.0,
-            lateral_speed_mps=0.8,
-            lateral_margin_m=0.25,
-            horizon_s=4.0,
-            yaw_rate_rps=2.0,
-            max_tilt_rad=0.3,
-        ),
-        # distance per crank turn: ~2.1 m wheel circumference x gear ratio 2-3
-        _draw_rigid((4.5, 6.5)),
-    ),
-    "vehicle": AgentKind(
-        "vehicle",
-        (1.4, 1.8),
-        (1.4, 2.0),
-        (3.7, 4.6),
-        SpeedDistribution(30.0 / KMH_PER_MPS, 60.0 / KMH_PER_MPS),
-        MotionParams(
-            accel_mps2=1.5,
-            comfort_decel_mps2=2.5,
-            max_decel_mps2=8.0,
-            headway_s=1.2,
-            min_gap_m=2.0,
-            lookahead_m=90.0,
-            lateral_speed_mps=0.8,
-            lateral_margin_m=0.5,
-            horizon_s=4.0,
-            yaw_rate_rps=1.0,
-            max_tilt_rad=0.1,
-        ),
-        # wheel circumference: the phase is the wheel's turn
-        _draw_rigid((1.9, 2.1)),
-    ),
-    "animal": AgentKind(
-        "animal",
-        (0.2, 0.35),
-        (0.3, 0.7),
-        (0.5, 1.0),
-        SpeedDistribution(0.5, 2.5),
-        MotionParams(
-            accel_mps2=2.0,
-            comfort_decel_mps2=3.0,
-            max_decel_mps2=6.0,
-            headway_s=0.4,
-            min_gap_m=0.3,
-            lookahead_m=8.0,
-            lateral_speed_mps=0.6,
-            lateral_margin_m=0.1,
-            horizon_s=2.0,
-            yaw_rate_rps=4.0,
-        ),
-        _draw_rigid((0.6, 1.0)),
-    ),
+#: Body recipes by name (``AgentKind.body.recipe``): (kind, rng, options) -> traits.
+BODY_RECIPES: dict[str, BodyRecipe] = {
+    "walker": _draw_pedestrian,
+    "group": _draw_group,
+    "rigid": _draw_rigid,
 }
 
 
+_DEFAULT_OPTIONS = DrawOptions()
+
+
 def draw_agent(
-    cls: str, rng: np.random.Generator, options: DrawOptions = DrawOptions()
+    cls: str, rng: np.random.Generator, options: DrawOptions = _DEFAULT_OPTIONS
 ) -> AgentTraits:
     """Draw the looks and desired speed of one agent of class ``cls``."""
+    kind = kind_of(cls)
     try:
-        kind = AGENT_KINDS[cls]
+        recipe = BODY_RECIPES[kind.body.recipe]
     except KeyError:
-        raise ValueError(f"unknown agent class {cls!r}; valid: {', '.join(AGENT_KINDS)}") from None
-    return kind.draw(kind, rng, options)
+        raise ValueError(
+            f"kind {cls!r}: unknown body recipe {kind.body.recipe!r}; valid: {', '.join(BODY_RECIPES)}"
+        ) from None
+    return recipe(kind, rng, options)

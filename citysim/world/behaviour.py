@@ -29,7 +29,8 @@ from __future__ import annotations
 import numpy as np
 import pymunk
 
-from citysim.world.agents import AGENT_KINDS, AgentTraits
+from citysim.config.kinds import AGENT_KINDS
+from citysim.world.agents import AgentTraits
 from citysim.world.geometry import Leg, oriented_overlaps, wrap_angle
 
 #: Lateral candidates evaluated per agent and step (evenly over the band).
@@ -40,8 +41,6 @@ W_PREF, W_COMFORT, W_KEEP = 0.3, 1.5, 0.2
 #: Impatience: an agent held still for t seconds weighs those reluctances by
 #: 1 / (1 + t / IMPATIENCE_S), so two that block each other soon both give way.
 IMPATIENCE_S = 2.0
-#: Road users walkers give way to before stepping onto the road.
-ROAD_USERS = ("vehicle", "cyclist")
 #: Extra time a crossing walker wants between the crossing and the next road user, s.
 CROSSING_MARGIN_S = 1.5
 #: Clearance the behaviour keeps between footprints (sidestepping, closing up), m.
@@ -81,7 +80,7 @@ class Mover:
         self.pause_until_s = -1.0
         self.still_s = 0.0  # seconds held still by others (not waiting at a kerb, not pausing)
         self.waiting = False
-        self.road_user = traits.cls in ROAD_USERS
+        self.road_user = AGENT_KINDS[traits.cls].road_user  # walkers give way to it
 
     @property
     def leg(self) -> Leg:

@@ -27,10 +27,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pymunk
 
-from citysim.world.agents import AGENT_KINDS, AgentState, AgentTraits, MemberState
-from citysim.world.street import Street, build_street
+from citysim.config.kinds import AGENT_KINDS
+from citysim.world.agents import AgentState, AgentTraits, MemberState
 from citysim.world.behaviour import Layout, Mover, layout_for, plan_moves
 from citysim.world.geometry import Leg, Route, oriented_overlaps
+from citysim.world.street import Street, build_street
 
 if TYPE_CHECKING:
     from citysim.config.scenario import Scenario
@@ -181,7 +182,7 @@ class World:
 
     # ------------------------------------------------------ after the space stepped
     def _advance_routes(self, agents: list[Mover], dt: float) -> None:
-        """After the space stepped: gait phases, leg changes, removal of leavers, animal pauses."""
+        """After the space stepped: gait phases, leg changes, removal of leavers, pauses (animals)."""
         for a in agents:
             speed = math.hypot(*a.velocity)
             dist = speed * dt
@@ -204,10 +205,10 @@ class World:
                     break
                 a.leg_i += 1
                 a.target_m = a.leg.pref_m
-            if a.oid in self._agents and a.traits.cls == "animal" and a.pause_until_s < self.t_s:
-                # foxes and dogs stop now and then (every ~10 s of walking, for 1-4 s)
-                if self.rng.random() < dt / 10.0:
-                    a.pause_until_s = self.t_s + float(self.rng.uniform(1.0, 4.0))
+            pauses = AGENT_KINDS[a.traits.cls].pauses  # animals stop now and then
+            if a.oid in self._agents and pauses is not None and a.pause_until_s < self.t_s:
+                if self.rng.random() < dt / pauses.every_s:
+                    a.pause_until_s = self.t_s + float(self.rng.uniform(*pauses.duration_s))
 
     def _remove(self, a: Mover) -> None:
         self.space.remove(a.shape, a.body)

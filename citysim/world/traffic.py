@@ -3,14 +3,15 @@
 ``arrivals(env, world, spec, rng)`` is a simpy process: a non-homogeneous
 Poisson process (thinning, Lewis & Shedler 1979) at the class rate times its
 hourly profile; each arrival is drawn (``draw_arrival``) and spawned into the
-world. Routes, by class (``ROUTE_PLANNERS``):
+world. Routes, by planner name (``ROUTE_PLANNERS``; each kind's record names its
+planner, ``citysim.config.kinds.AgentKind.route``):
 
-* pedestrians and groups enter at either street end on either sidewalk and
+* "sidewalk" (pedestrians, groups): enter at either street end on either sidewalk and
   keep right; a share crosses the road, at a marked crossing or anywhere,
   some diagonally, then walks on (or back) on the other sidewalk;
-* cyclists ride near the right edge of a lane in its direction;
-* vehicles keep a lane in its direction;
-* animals come out of the verge, wander across the street and leave.
+* "road_edge" (cyclists): ride near the right edge of a lane in its direction;
+* "lane" (vehicles): keep a lane in its direction;
+* "verge_wander" (animals): come out of the verge, wander across the street and leave.
 
 Conventions: world frame of DESIGN.md; leg offsets are metres to the left of
 the direction of travel (see ``citysim.world.geometry``).
@@ -24,12 +25,14 @@ from dataclasses import replace
 import numpy as np
 import simpy
 
-from citysim.world.agents import AGENT_KINDS, AgentTraits, DrawOptions, SpeedDistribution, draw_agent
+from citysim.config.kinds import AGENT_KINDS
+from citysim.config.motion import KMH_PER_MPS, DrawOptions, SpeedDistribution
 from citysim.config.scenario import Scenario
 from citysim.config.traffic import TrafficClassSpec
-from citysim.world.street import Lane, Sidewalk, Street
-from citysim.world.physics import World
+from citysim.world.agents import AgentTraits, draw_agent
 from citysim.world.geometry import Leg, Route
+from citysim.world.physics import World
+from citysim.world.street import Lane, Sidewalk, Street
 
 __all__ = ["ROUTE_PLANNERS", "arrivals", "draw_arrival", "start_traffic"]
 
@@ -130,7 +133,7 @@ def _lane_leg(street: Street, lane: Lane, traits: AgentTraits, band, comfort, pr
     return Leg(start, end, band, comfort, pref)
 
 
-def _cyclist_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator, night: bool):
+def _road_edge_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator, night: bool):
     i = int(rng.integers(len(street.lanes)))
     lane = street.lanes[i]
     traits = draw_agent(spec.kind, rng, spec.draw_options(night=night))
@@ -141,7 +144,7 @@ def _cyclist_route(street: Street, spec: TrafficClassSpec, rng: np.random.Genera
     return traits, Route((leg,), f"lane{i}")
 
 
-def _vehicle_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator, night: bool):
+def _lane_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator, night: bool):
     i = int(rng.integers(len(street.lanes)))
     lane = street.lanes[i]
     traits = draw_agent(spec.kind, rng, spec.draw_options(night=night))
@@ -151,7 +154,7 @@ def _vehicle_route(street: Street, spec: TrafficClassSpec, rng: np.random.Genera
     return traits, Route((leg,), f"lane{i}")
 
 
-def _animal_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator, night: bool):
+def _verge_wander_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator, night: bool):
     traits = draw_agent(spec.kind, rng, spec.draw_options(night=night))
     edges = [(s.y_center_m - s.width_m / 2, s.y_center_m + s.width_m / 2) for s in street.sidewalks]
     edges += [
@@ -174,16 +177,15 @@ def _animal_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generat
         for a, b in zip(points[:-1], points[1:], strict=True)
         if a != b
     )
-    return traits, Route(legs, "animal")
+    return traits, Route(legs, "verge")  # one entry queue for all that come out of the verge
 
 
-#: Route planners by class name: (street, spec, rng, night) -> (traits, route).
+#: Route planners by name (``AgentKind.route``): (street, spec, rng, night) -> (traits, route).
 ROUTE_PLANNERS: dict[str, Callable[..., tuple[AgentTraits, Route]]] = {
-    "pedestrian": _walker_route,
-    "group": _walker_route,
-    "cyclist": _cyclist_route,
-    "vehicle": _vehicle_route,
-    "animal": _animal_route,
+    "sidewalk": _walker_route,
+    "road_edge": _road_edge_route,
+    "lane": _lane_route,
+    "verge_wander": _verge_wander_route,
 }
 
 
@@ -191,7 +193,7 @@ def draw_arrival(
     street: Street, spec: TrafficClassSpec, rng: np.random.Generator, *, night: bool = True
 ) -> tuple[AgentTraits, Route]:
     """One arriving agent of ``spec``'s class: its looks, speed and route."""
-    return ROUTE_PLANNERS[spec.kind](street, spec, rng, night)
+    return ROUTE_PLANNERS[AGENT_KINDS[spec.kind].route](street, spec, rng, night)
 
 
 def arrivals(
@@ -223,18 +225,20 @@ def scripted_arrival(street: Street, agent, night: bool) -> tuple[AgentTraits, R
     whatever the random traffic does; it keeps its lane or sidewalk from end to end.
     """
     kind = AGENT_KINDS[agent.cls]
-    speed_mps = agent.speed_kmh / 3.6
-    light = (night and agent.cls in ("cyclist", "vehicle")) if agent.light_on is None else agent.light_on
+    speed_mps = agent.speed_kmh / KMH_PER_MPS
+    # the typical agent of its kind: lit at night when most of its kind are
+    light = (night and kind.lit_share >= 0.5) if agent.light_on is None else agent.light_on
     fixed = np.random.default_rng(0)  # the looks of a scripted agent never depend on the scenario seed
     drawn = draw_agent(agent.cls, fixed, DrawOptions(speed=SpeedDistribution(speed_mps, speed_mps), night=night))
     traits = replace(
         drawn,
-        width_m=float(np.mean(kind.width_m)) if agent.cls != "group" else drawn.width_m,
+        # a group's width is its formation's, drawn with its members
+        width_m=float(np.mean(kind.width_m)) if kind.body.recipe != "group" else drawn.width_m,
         height_m=float(np.mean(kind.height_m)),
         desired_speed_mps=speed_mps,
         light_on=light,
     )
-    if agent.cls in ("cyclist", "vehicle"):
+    if kind.road_user:
         lane = replace(street.lanes[agent.path], direction=agent.direction)
         band = (-0.2, 0.2)
         leg = _lane_leg(street, lane, traits, band, band, 0.0)

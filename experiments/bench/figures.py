@@ -113,8 +113,8 @@ def peak_memory_mb(fn, frames) -> float:
 
 
 def bench_detector() -> dict:
-    from detector.general_model import default_model
     from detector.detector import Detector
+    from detector.general_model import default_model
 
     print("== detector vs OpenCV floor (single thread, CPU time, interleaved frame by frame) ==")
     model = default_model()
@@ -139,9 +139,9 @@ def bench_detector() -> dict:
 def bench_render() -> dict:
     """Render ms per 320x240 frame with 0, 5 and 20 agents in view, beside the detector's ms on those frames."""
     from citysim.render.camera import CameraRenderer
-    from experiments.bench.scene import BENCH_NIGHT, bench_agents, bench_street
-    from detector.general_model import default_model
     from detector.detector import Detector
+    from detector.general_model import default_model
+    from experiments.bench.scene import BENCH_NIGHT, bench_agents, bench_street
 
     print("== renderer vs detector (320x240, CPU ms per frame, interleaved) ==")
     street = bench_street()

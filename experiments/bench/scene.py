@@ -19,9 +19,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from citysim.world.agents import AgentState, MemberState
 from citysim.config.scenario import EnvironmentSpec
 from citysim.render.camera import CameraRenderer
+from citysim.world.agents import AgentState, MemberState
 from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from detector.camera import CameraModel
 

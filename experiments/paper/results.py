@@ -9,7 +9,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from experiments.paper.metrics import BandRate, BaselineRates, Confusions, PrecisionRecall, WindowCheck
+from experiments.paper.metrics import (
+    BandRate,
+    BaselineRates,
+    Confusions,
+    PrecisionRecall,
+    WindowCheck,
+)
 from experiments.paper.scenes import Budget, SceneRecords
 
 

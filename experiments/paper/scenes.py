@@ -35,8 +35,8 @@ from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.render.camera import TruthObject
 from citysim.sim.night import build_night
 from detector.classes import CLASSES
-from detector.general_model import default_model
 from detector.detector import Detection, Detector
+from detector.general_model import default_model
 from detector.segment import Regions
 
 SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"

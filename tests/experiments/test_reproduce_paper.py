@@ -23,6 +23,7 @@ from experiments.paper.metrics import (
     tpr_by_distance,
     window_detection,
 )
+from experiments.paper.reproduce import QUICK_BUDGET, main, reproduce  # noqa: E402
 from experiments.paper.scenes import (  # noqa: E402
     PAPER_SCENES,
     Budget,
@@ -30,7 +31,6 @@ from experiments.paper.scenes import (  # noqa: E402
     film_scene,
     score_frame,
 )
-from experiments.paper.reproduce import QUICK_BUDGET, main, reproduce  # noqa: E402
 
 pytestmark = pytest.mark.slow  # real simulation or footage: tens of seconds
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from citysim.world.agents import MAX_SPEED_MPS
+from citysim.config.motion import MAX_SPEED_MPS
 from citysim.config.scenario import ScenarioError, load_scenario, override, scenario_from_mapping
 from citysim.world.street import build_street
 

@@ -9,13 +9,13 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from citysim.world.agents import AgentState
 from citysim.config.street import LuminaireSpec
 from citysim.control.lamps import Lamp
 from citysim.metrics.confusion import CONFUSION_CLASSES, DetectionConfusion
 from citysim.metrics.energy import energy_summary
 from citysim.metrics.quantiles import QuantileSketch
 from citysim.metrics.zones import ZoneTracker
+from citysim.world.agents import AgentState
 from citysim.world.street import LampSite, Lane, Sidewalk, Street
 from detector.camera import CameraModel
 

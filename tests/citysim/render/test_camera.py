@@ -8,14 +8,14 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.world.agents import AgentState, MemberState
 from citysim.config.scenario import EnvironmentSpec
-from citysim.render.camera import CameraRenderer, RenderOptions
-from experiments.bench.scene import bench_render
 from citysim.render.blur import _smear
+from citysim.render.camera import CameraRenderer, RenderOptions
 from citysim.render.models import agent_shape
+from citysim.world.agents import AgentState, MemberState
 from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from detector.camera import CameraModel
+from experiments.bench.scene import bench_render
 
 PINHOLE = CameraModel(
     height_m=4.0,

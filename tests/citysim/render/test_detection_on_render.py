@@ -7,13 +7,13 @@ at least 90% of the fully visible pedestrians within 25 m of the camera.
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from citysim.config.scenario import load_scenario, override
 from citysim.metrics.confusion import iou_matrix
 from citysim.sim.night import build_night
-from detector.general_model import default_model
 from detector.detector import Detector
-import pytest
+from detector.general_model import default_model
 
 pytestmark = pytest.mark.slow  # real simulation or footage: tens of seconds
 

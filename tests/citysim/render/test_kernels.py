@@ -8,23 +8,23 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.world.agents import AgentState
 from citysim.render.agents import AgentLighting, part_radiance
 from citysim.render.beams import BEAMS
 from citysim.render.canvas import Z_NEAR_M
 from citysim.render.kernels import SUBPIXEL_BITS, fill_ranks, label_stats
 from citysim.render.models import agent_shape
 from citysim.render.spots import add_ground_spots, spot_class
+from citysim.world.agents import AgentState
 from tests.citysim.render.test_camera import (
-    EXACT_KW,
-    settings,
     BARREL,
     EXACT,
+    EXACT_KW,
     PINHOLE,
     changed_box,
     make_street,
     one_of_each,
     renderer,
+    settings,
 )
 
 ONE = 1 << SUBPIXEL_BITS
@@ -161,7 +161,7 @@ def test_spots_follow_the_beam_formula_on_the_ground() -> None:
     car = AgentState(4, "vehicle", 6.0, -1.75, 0.1, 12.0, 4.4, 1.8, 1.5, light_on=True)
     img = np.zeros(r.canvas.shape, np.float32)
     add_ground_spots(r.scene, img, [car], 1.0)
-    spec, row = BEAMS["vehicle"], spot_class("vehicle").row
+    spec, row = BEAMS["headlights"], spot_class("vehicle").row
     f_frac, l_frac, f_far, half_w = row[:4]
     c, s = math.cos(car.heading_rad), math.sin(car.heading_rad)
     ox = car.x_m + c * f_frac * car.length_m - s * l_frac * car.width_m

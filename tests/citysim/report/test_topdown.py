@@ -8,8 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from citysim.report.topdown import FOOTPRINT_RANGE_M, camera_footprint_m, plot_topdown
+from citysim.world.street import LampSite, Lane, Sidewalk, StaticObject, Street
 from tests.citysim.render.test_camera import PINHOLE as CAMERA
 
 

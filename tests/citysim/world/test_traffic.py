@@ -7,9 +7,11 @@ import numpy as np
 import pytest
 import simpy
 
-from citysim.world.agents import AGENT_KINDS, MAX_SPEED_MPS, DrawOptions, draw_agent
+from citysim.config.kinds import AGENT_KINDS
+from citysim.config.motion import MAX_SPEED_MPS, DrawOptions
 from citysim.config.scenario import load_scenario, override
-from citysim.config.traffic import PedestrianTraffic, VehicleTraffic
+from citysim.config.traffic import TRAFFIC_SPECS
+from citysim.world.agents import draw_agent
 from citysim.world.street import build_street
 from citysim.world.traffic import arrivals, draw_arrival, start_traffic
 
@@ -85,7 +87,7 @@ def test_groups_are_two_to_four_side_by_side():
 
 def test_running_share_and_speeds():
     rng = np.random.default_rng(3)
-    opts = PedestrianTraffic(running_fraction=0.3).draw_options(night=True)
+    opts = TRAFFIC_SPECS["pedestrian"](running_fraction=0.3).draw_options(night=True)
     drawn = [draw_agent("pedestrian", rng, opts) for _ in range(2000)]
     runners = [t for t in drawn if t.running]
     assert abs(len(runners) / len(drawn) - 0.3) < 0.04
@@ -96,7 +98,7 @@ def test_running_share_and_speeds():
 
 def test_lights_only_at_night():
     rng = np.random.default_rng(4)
-    spec = VehicleTraffic(rate_per_hour=1.0)
+    spec = TRAFFIC_SPECS["vehicle"](rate_per_hour=1.0)
     assert all(
         draw_agent("vehicle", rng, spec.draw_options(night=True)).light_on for _ in range(50)
     )
@@ -108,7 +110,7 @@ def test_lights_only_at_night():
 def test_arrival_count_is_poisson(street):
     env = simpy.Environment()
     rec = _Recorder(env, street)
-    spec = VehicleTraffic(rate_per_hour=60.0)
+    spec = TRAFFIC_SPECS["vehicle"](rate_per_hour=60.0)
     env.process(arrivals(env, rec, spec, np.random.default_rng(5)))
     hours = 100
     env.run(until=hours * 3600)
@@ -127,7 +129,7 @@ def test_arrivals_follow_the_hourly_profile(street):
     for seed in range(20):
         env = simpy.Environment()
         rec = _Recorder(env, street)
-        spec = PedestrianTraffic(rate_per_hour=200.0, hourly_profile=(1.0, 0.25, 0.0))
+        spec = TRAFFIC_SPECS["pedestrian"](rate_per_hour=200.0, hourly_profile=(1.0, 0.25, 0.0))
         env.process(arrivals(env, rec, spec, np.random.default_rng(seed)))
         env.run(until=4 * 3600)
         counts += np.bincount((np.array(rec.times) // 3600).astype(int), minlength=4)[:4]

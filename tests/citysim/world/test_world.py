@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 import simpy
 
-from citysim.world.agents import MAX_SPEED_MPS, AgentTraits
+from citysim.config.motion import MAX_SPEED_MPS
 from citysim.config.scenario import load_scenario, override
+from citysim.world.agents import AgentTraits
+from citysim.world.geometry import oriented_overlaps
+from citysim.world.physics import Leg, Route, World, physics_process
 from citysim.world.street import build_street
 from citysim.world.traffic import start_traffic
-from citysim.world.physics import Leg, Route, World, physics_process
-from citysim.world.geometry import oriented_overlaps
 
 SUBURBAN = Path(__file__).resolve().parents[3] / "scenarios" / "suburban_night.yaml"
 BUSY = 5.0  # traffic multiplier over the suburban weeknight
