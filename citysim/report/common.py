@@ -244,3 +244,12 @@ def write_notes(plot_dir: Path, notes: list[str]) -> None:
         path.write_text("\n".join(notes) + "\n")
     elif path.exists():
         path.unlink()
+
+
+def objects_note(n_objects: int | None) -> str:
+    """'n=12 objects' for a legend title ('' when unknown)."""
+    return "" if n_objects is None else f"n={n_objects} {plural(n_objects, 'object')}"
+
+
+def plural(n: int, word: str) -> str:
+    return word if n == 1 else word + "s"

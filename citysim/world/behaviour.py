@@ -26,12 +26,15 @@ leg direction (``citysim.world.geometry``); speeds m/s; angles rad CCW from +x.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
+
 import numpy as np
 import pymunk
 
 from citysim.config.kinds import AGENT_KINDS
 from citysim.world.agents import AgentTraits
-from citysim.world.geometry import Leg, oriented_overlaps, wrap_angle
+from citysim.world.conflicts import must_wait, resolve_overlaps
+from citysim.world.geometry import Leg, wrap_angle
 
 #: Lateral candidates evaluated per agent and step (evenly over the band).
 N_LATERAL_CANDIDATES = 9
@@ -41,13 +44,8 @@ W_PREF, W_COMFORT, W_KEEP = 0.3, 1.5, 0.2
 #: Impatience: an agent held still for t seconds weighs those reluctances by
 #: 1 / (1 + t / IMPATIENCE_S), so two that block each other soon both give way.
 IMPATIENCE_S = 2.0
-#: Extra time a crossing walker wants between the crossing and the next road user, s.
-CROSSING_MARGIN_S = 1.5
 #: Clearance the behaviour keeps between footprints (sidestepping, closing up), m.
 CLEARANCE_M = 0.01
-#: Overlap the last-resort check tolerates: pymunk integrates p + v dt, which may
-#: land a float rounding (~1e-14 m) away from the checked pose.
-OVERLAP_TOLERANCE_M = 1e-9
 
 
 class Mover:
@@ -122,32 +120,53 @@ def layout_for(agents: list[Mover], cached: Layout | None) -> Layout:
     return cached if cached is not None and cached.key == key else Layout(key, agents)
 
 
-def plan_moves(agents: list[Mover], lay: Layout, dt: float, t_s: float) -> int:
-    """Decide every agent's move for the next ``dt`` seconds and hand it to its pymunk body.
+@dataclass(frozen=True)
+class Surroundings:
+    """Every pair of agents seen from each one's leg frame (arrays [i, j]: j as agent i sees it).
 
-    Sets each body's velocity and angular velocity (``Space.step`` then integrates
-    them) and each agent's speed, lateral target and waiting flag. Returns the
-    number of moves the last-resort overlap check dropped.
+    ``fwd``/``lat``: j's position along / across i's leg (lat from i's leg line); ``ext_f``/
+    ``ext_l``: j's half extents along / across i's leg; ``gap``: free distance from i's front to
+    j's back along i's leg; ``v_along``: j's velocity along i's leg; ``ahead``: j in front of i
+    within its look-ahead; ``beside``: j level with i; ``half``: i's half width plus its margin
+    (less when impatient). Metres, m/s and radians; ``d`` is pos_j - pos_i in the world frame.
     """
-    n = len(agents)
-    length, width, unit, normal, start = lay.length, lay.width, lay.unit, lay.normal, lay.start
-    leg_len, band, comfort, pref = lay.leg_len, lay.band, lay.comfort, lay.pref
-    acc_max, b_comf, b_max, headway, s0, look, v_lat, margin, horizon, yaw_rate, max_tilt = (
-        lay.motion
-    )
-    pos = np.array([tuple(a.body.position) for a in agents])
-    th = np.array([a.body.angle for a in agents])
-    vel = np.array([a.velocity for a in agents])
-    dyn = np.array([(a.speed_mps, a.target_m, a.still_s, a.pause_until_s) for a in agents])
-    speed, target_prev = dyn[:, 0], dyn[:, 1]
-    patience = 1.0 / (1.0 + dyn[:, 2] / IMPATIENCE_S)
-    v0 = np.where(dyn[:, 3] > t_s, 0.0, lay.v0)  # a pausing animal wants to stand
 
-    rel = pos - start
-    s_along = np.einsum("ik,ik->i", rel, unit)
-    off = np.einsum("ik,ik->i", rel, normal)
+    d: np.ndarray
+    lat: np.ndarray
+    phi: np.ndarray
+    ext_l: np.ndarray
+    self_l: np.ndarray
+    gap: np.ndarray
+    v_along: np.ndarray
+    ahead: np.ndarray
+    beside: np.ndarray
+    half: np.ndarray
 
-    # ---- pairwise geometry in each agent's leg frame: d[i, j] = pos_j - pos_i
+
+@dataclass(frozen=True)
+class LateralWish:
+    """Per agent: where it stands across its leg now (``off``), where it aimed before and prefers
+    to be, its band and comfort band, patience, desired speed and look-ahead time."""
+
+    off: np.ndarray
+    target_prev: np.ndarray
+    pref: np.ndarray
+    band: np.ndarray
+    comfort: np.ndarray
+    patience: np.ndarray
+    v0: np.ndarray
+    horizon: np.ndarray
+
+    def rows(self, rows: np.ndarray) -> LateralWish:
+        return LateralWish(*(getattr(self, f.name)[rows] for f in fields(self)))
+
+
+def surroundings(lay: Layout, pos: np.ndarray, th: np.ndarray, vel: np.ndarray, off: np.ndarray,
+                 patience: np.ndarray) -> Surroundings:  # fmt: skip
+    """Each agent's view of every other in its own leg frame (see ``Surroundings``)."""
+    n = len(pos)
+    length, width, unit, normal = lay.length, lay.width, lay.unit, lay.normal
+    look, margin = lay.motion[5], lay.motion[7]
     d = pos[None, :, :] - pos[:, None, :]
     fwd = np.einsum("ijk,ik->ij", d, unit)
     lat = off[:, None] + np.einsum("ijk,ik->ij", d, normal)
@@ -163,25 +182,54 @@ def plan_moves(agents: list[Mover], lay: Layout, dt: float, t_s: float) -> int:
     ahead = others & (fwd > 0) & (gap < look[:, None])
     half = self_l + margin * patience  # the held-up squeeze past with less clearance
     beside = others & (np.abs(fwd) < ext_f + self_f[:, None] + 0.3)
+    return Surroundings(d, lat, phi, ext_l, self_l, gap, v_along, ahead, beside, half)
+
+
+def plan_moves(agents: list[Mover], lay: Layout, dt: float, t_s: float) -> int:
+    """Decide every agent's move for the next ``dt`` seconds and hand it to its pymunk body.
+
+    Sets each body's velocity and angular velocity (``Space.step`` then integrates
+    them) and each agent's speed, lateral target and waiting flag. Returns the
+    number of moves the last-resort overlap check dropped.
+    """
+    pos = np.array([tuple(a.body.position) for a in agents])
+    th = np.array([a.body.angle for a in agents])
+    vel = np.array([a.velocity for a in agents])
+    dyn = np.array([(a.speed_mps, a.target_m, a.still_s, a.pause_until_s) for a in agents])
+    patience = 1.0 / (1.0 + dyn[:, 2] / IMPATIENCE_S)
+    v0 = np.where(dyn[:, 3] > t_s, 0.0, lay.v0)  # a pausing animal wants to stand
+    rel = pos - lay.start
+    s_along = np.einsum("ik,ik->i", rel, lay.unit)
+    off = np.einsum("ik,ik->i", rel, lay.normal)
+    nb = surroundings(lay, pos, th, vel, off, patience)
+    wish = LateralWish(off, dyn[:, 1], lay.pref, lay.band, lay.comfort, patience, v0, lay.motion[8])
 
     # ---- lateral choice (only agents with someone ahead or beside; the rest head for pref)
-    target = pref.copy()
-    reachable = (lat + ext_l > (band[:, 0] - half)[:, None]) & (
-        lat - ext_l < (band[:, 1] + half)[:, None]
+    target = lay.pref.copy()
+    reachable = (nb.lat + nb.ext_l > (lay.band[:, 0] - nb.half)[:, None]) & (
+        nb.lat - nb.ext_l < (lay.band[:, 1] + nb.half)[:, None]
     )
-    rows = np.flatnonzero((ahead & reachable | beside).any(axis=1))
+    rows = np.flatnonzero((nb.ahead & reachable | nb.beside).any(axis=1))
     if rows.size:
-        target[rows] = choose_offsets(
-            rows, off, target_prev, pref, band, comfort, patience, v0, horizon, half,
-            lat, ext_l, gap, v_along, phi, ahead, beside, d, unit,
-        )  # fmt: skip
+        target[rows] = choose_offsets(rows, wish, nb, lay.unit)
 
     # ---- giving way at the kerb
-    wait_here, wait_at_end = must_wait(agents, pos, vel, length, width, s_along, leg_len)
+    wait_here, wait_at_end = must_wait(agents, pos, vel, lay.length, lay.width, s_along, lay.leg_len)
     target = np.where(wait_here, off, target)
+    step_lat = lateral_step(lay, nb, off, target, dt)
+    ds = forward_step(lay, nb, dyn[:, 0], v0, off, step_lat, dt)
+    # a walker that must give way stops at the kerb (end of its leg, or start of the crossing)
+    to_end = lay.leg_len - s_along
+    ds = np.where(wait_at_end, np.minimum(ds, np.maximum(to_end - 0.01, 0.0) * (to_end > 0.05)), ds)
+    ds = np.where(wait_here, 0.0, ds)
+    return move_bodies(agents, lay, (pos, th), (ds, step_lat, v0), (target, wait_here | wait_at_end), dt)
 
-    # ---- lateral step, stopping short of anyone beside
+
+def lateral_step(lay: Layout, nb: Surroundings, off: np.ndarray, target: np.ndarray, dt: float) -> np.ndarray:
+    """Each agent's sideways step toward its target this step, stopping short of anyone beside, m."""
+    v_lat = lay.motion[6]
     step_lat = np.clip(target - off, -v_lat * dt, v_lat * dt)
+    lat, ext_l, self_l, beside = nb.lat, nb.ext_l, nb.self_l, nb.beside
     room_left = np.where(
         beside & (lat > off[:, None]), lat - ext_l - (off + self_l)[:, None], np.inf
     ).min(1)
@@ -190,18 +238,24 @@ def plan_moves(agents: list[Mover], lay: Layout, dt: float, t_s: float) -> int:
     ).min(1)
     # the one beside may step toward me in the same step: each takes half the room
     room_left, room_right = (room_left - CLEARANCE_M) / 2, (room_right - CLEARANCE_M) / 2
-    step_lat = np.clip(step_lat, -np.maximum(room_right, 0), np.maximum(room_left, 0))
-    off_new = off + step_lat
+    return np.clip(step_lat, -np.maximum(room_right, 0), np.maximum(room_left, 0))
 
-    # ---- longitudinal: IDM behind the leader in the swept corridor
-    c_lo = np.minimum(off, off_new) - half
-    c_hi = np.maximum(off, off_new) + half
-    in_corridor = ahead & (lat + ext_l > c_lo[:, None]) & (lat - ext_l < c_hi[:, None])
-    lead_gap = np.where(in_corridor, gap, np.inf)
+
+def forward_step(lay: Layout, nb: Surroundings, speed: np.ndarray, v0: np.ndarray, off: np.ndarray,
+                 step_lat: np.ndarray, dt: float) -> np.ndarray:  # fmt: skip
+    """Each agent's step along its leg: the Intelligent Driver Model behind the leader in the
+    corridor its sideways step sweeps, never more than the room left to that leader, m."""
+    n = len(off)
+    acc_max, b_comf, b_max, headway, s0 = lay.motion[:5]
+    off_new = off + step_lat
+    c_lo = np.minimum(off, off_new) - nb.half
+    c_hi = np.maximum(off, off_new) + nb.half
+    in_corridor = nb.ahead & (nb.lat + nb.ext_l > c_lo[:, None]) & (nb.lat - nb.ext_l < c_hi[:, None])
+    lead_gap = np.where(in_corridor, nb.gap, np.inf)
     lead = np.argmin(lead_gap, axis=1)
     g = lead_gap[np.arange(n), lead]
     has_lead = np.isfinite(g)
-    v_lead = np.where(has_lead, v_along[np.arange(n), lead], 0.0)
+    v_lead = np.where(has_lead, nb.v_along[np.arange(n), lead], 0.0)
     v = np.maximum(speed, 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         free_term = np.where(v0 > 0, 1.0 - (v / np.maximum(v0, 1e-9)) ** 4, -1.0)
@@ -216,35 +270,30 @@ def plan_moves(agents: list[Mover], lay: Layout, dt: float, t_s: float) -> int:
     ds = v_new * dt
     oncoming = has_lead & (v_lead < -0.05)
     room = np.where(oncoming, g / 2, g) - CLEARANCE_M
-    ds = np.where(has_lead, np.minimum(ds, np.maximum(room, 0.0)), ds)
-    # a walker that must give way stops at the kerb (end of its leg, or start of the crossing)
-    to_end = leg_len - s_along
-    ds = np.where(wait_at_end, np.minimum(ds, np.maximum(to_end - 0.01, 0.0) * (to_end > 0.05)), ds)
-    ds = np.where(wait_here, 0.0, ds)
+    return np.where(has_lead, np.minimum(ds, np.maximum(room, 0.0)), ds)
 
-    # ---- proposed poses; drop moves that would overlap
-    new_pos = pos + ds[:, None] * unit + step_lat[:, None] * normal
+
+def move_bodies(agents: list[Mover], lay: Layout, pose: tuple, step: tuple, intent: tuple, dt: float) -> int:
+    """Hand the moves to the pymunk bodies, dropping those that would overlap; the count dropped.
+
+    ``pose`` = (positions, headings) now; ``step`` = (along, sideways, desired speed);
+    ``intent`` = (lateral targets, waiting flags)."""
+    (pos, th), (ds, step_lat, v0), (target, waiting) = pose, step, intent
+    yaw_rate, max_tilt = lay.motion[9], lay.motion[10]
+    new_pos = pos + ds[:, None] * lay.unit + step_lat[:, None] * lay.normal
     # face along the leg; riders and drivers tilt into a swerve (a slow one does
     # not turn on the spot), walkers and animals sidestep facing forward, which
     # also keeps side-by-side footprints parallel
     tilt = np.clip(np.arctan2(step_lat, np.maximum(ds, v0 * dt)), -max_tilt, max_tilt)
     want = lay.heading + tilt
     new_th = th + np.clip(wrap_angle(want - th), -yaw_rate * dt, yaw_rate * dt)
-    along_pos = pos + ds[:, None] * unit
-    new_pos, new_th, stage = resolve_overlaps(pos, th, new_pos, new_th, along_pos, length, width)
+    along_pos = pos + ds[:, None] * lay.unit
+    new_pos, new_th, stage = resolve_overlaps(pos, th, new_pos, new_th, along_pos, lay.length, lay.width)
     ds = np.where(stage < 3, ds, 0.0)
 
     velocity = ((new_pos - pos) / dt).tolist()
     omega = (wrap_angle(new_th - th) / dt).tolist()
-    rows = zip(
-        agents,
-        velocity,
-        omega,
-        (ds / dt).tolist(),
-        target.tolist(),
-        (wait_here | wait_at_end).tolist(),
-        strict=True,
-    )
+    rows = zip(agents, velocity, omega, (ds / dt).tolist(), target.tolist(), waiting.tolist(), strict=True)
     for a, vel_i, omega_i, speed_i, target_i, waiting_i in rows:
         a.body.velocity = a.velocity = tuple(vel_i)
         a.body.angular_velocity = omega_i
@@ -252,23 +301,15 @@ def plan_moves(agents: list[Mover], lay: Layout, dt: float, t_s: float) -> int:
     return int((stage == 3).sum())
 
 
-def choose_offsets(
-    rows, off, target_prev, pref, band, comfort, patience, v0, horizon, half,
-    lat, ext_l, gap, v_along, phi, ahead, beside, d, unit,
-) -> np.ndarray:  # fmt: skip
+def choose_offsets(rows: np.ndarray, wish: LateralWish, nb: Surroundings, unit: np.ndarray) -> np.ndarray:
     """Best lateral offset for agents ``rows``: the candidate with the most free distance
     within ``horizon`` (minus reluctance), among those reachable without sweeping into
     anyone beside."""
-    off, target_prev, pref, band, comfort = (
-        off[rows],
-        target_prev[rows],
-        pref[rows],
-        band[rows],
-        comfort[rows],
-    )
-    v0, horizon, half, patience = v0[rows], horizon[rows], half[rows], patience[rows]
-    lat, ext_l, gap, v_along, phi = lat[rows], ext_l[rows], gap[rows], v_along[rows], phi[rows]
-    ahead, beside = ahead[rows], beside[rows]
+    me = wish.rows(rows)
+    off, target_prev, pref, band, comfort = me.off, me.target_prev, me.pref, me.band, me.comfort
+    v0, horizon, half, patience = me.v0, me.horizon, nb.half[rows], me.patience
+    lat, ext_l, gap, v_along, phi = nb.lat[rows], nb.ext_l[rows], nb.gap[rows], nb.v_along[rows], nb.phi[rows]
+    ahead, beside, d = nb.ahead[rows], nb.beside[rows], nb.d
     cands = np.concatenate(
         [off[:, None], target_prev[:, None], pref[:, None],
          np.linspace(band[:, 0], band[:, 1], N_LATERAL_CANDIDATES, axis=1)],
@@ -310,86 +351,3 @@ def choose_offsets(
         score[face] = -np.abs(cands[face] - edge[:, None])
     score[infeasible] = -np.inf  # never column 0: staying at the current offset sweeps nothing
     return cands[np.arange(len(rows)), np.argmax(score, axis=1)]
-
-
-def must_wait(agents, pos, vel, length, width, s_along, leg_len) -> tuple[np.ndarray, np.ndarray]:
-    """Walkers that must give way: (at the start of their crossing, at the end of the leg before it).
-
-    A walker crosses when every vehicle and cyclist heading for the crossing
-    arrives only after the walker has left that road user's strip of road
-    (plus ``CROSSING_MARGIN_S``): the near lane may be crossed in a gap the
-    far lane would not give.
-    """
-    here = np.zeros(len(agents), dtype=bool)
-    at_end = np.zeros(len(agents), dtype=bool)
-    road = np.array([a.road_user for a in agents])
-    if not road.any():
-        return here, at_end
-    r_xy, r_vel = pos[road], vel[road]
-    r_dir = np.sign(np.array([a.leg.unit[0] for a in agents])[road])
-    r_len, r_width = length[road], width[road]
-    r_speed = np.hypot(r_vel[:, 0], r_vel[:, 1])
-    for i, a in enumerate(agents):
-        if a.road_user:
-            continue
-        if a.leg.yield_to_traffic and s_along[i] < 0.3:
-            crossing, flag = a.leg, here
-        elif (
-            a.leg_i + 1 < len(a.legs)
-            and a.legs[a.leg_i + 1].yield_to_traffic
-            and leg_len[i] - s_along[i] < 3.0
-        ):
-            crossing, flag = a.legs[a.leg_i + 1], at_end
-        else:
-            continue
-        pad = a.traits.width_m / 2 + 0.5
-        x_lo = min(crossing.start_xy_m[0], crossing.end_xy_m[0]) - pad
-        x_hi = max(crossing.start_xy_m[0], crossing.end_xy_m[0]) + pad
-        front = r_xy[:, 0] + r_dir * r_len / 2
-        rear = r_xy[:, 0] - r_dir * r_len / 2
-        past = np.where(r_dir > 0, rear > x_hi, rear < x_lo)
-        dist = np.where(r_dir > 0, x_lo - front, front - x_hi)
-        t_arrive = np.maximum(dist, 0.0) / np.maximum(r_speed, 0.1)
-        # walking distance until this walker has cleared each road user's strip
-        y0, dy = crossing.start_xy_m[1], crossing.end_xy_m[1] - crossing.start_xy_m[1]
-        cleared_m = (
-            (np.abs(r_xy[:, 1] - y0) + (r_width + a.traits.width_m) / 2)
-            * crossing.length_m
-            / abs(dy)
-        )
-        t_leave = cleared_m / max(a.traits.desired_speed_mps, 0.5) + CROSSING_MARGIN_S
-        flag[i] = bool(np.any(~past & (t_arrive < t_leave)))
-    return here, at_end
-
-
-def resolve_overlaps(pos, th, new_pos, new_th, along_pos, length, width) -> tuple:
-    """Cut back moves that would overlap until no moved pair does.
-
-    A culprit first keeps its old heading, then also drops its sideways step
-    (keeping ``along_pos``, the move along its leg), then stays where it was.
-    Old poses never overlap, so this ends. Returns (poses, headings, stage per
-    agent: 0 as proposed, 1 turn dropped, 2 sidestep dropped, 3 stayed put).
-    """
-    n = len(pos)
-    stage = np.zeros(n, dtype=int)
-    reach = np.hypot(length, width) / 2
-    d = new_pos[None, :, :] - new_pos[:, None, :]
-    near = np.hypot(d[..., 0], d[..., 1]) < reach[:, None] + reach[None, :]
-    np.fill_diagonal(near, False)
-    if not near.any():  # bounding circles apart: nothing can overlap
-        return new_pos, new_th, stage
-    new_pos, new_th = new_pos.copy(), new_th.copy()
-    for _ in range(3 * n + 1):
-        moved = stage < 3
-        hit = oriented_overlaps(new_pos, new_th, length, width, margin_m=-OVERLAP_TOLERANCE_M)
-        hit &= moved[:, None] | moved[None, :]
-        culprit = hit.any(axis=1) & moved
-        if not culprit.any():
-            break
-        stage[culprit] += 1
-        new_th[culprit] = th[culprit]
-        sidestep = culprit & (stage == 2)
-        new_pos[sidestep] = along_pos[sidestep]
-        stay = culprit & (stage == 3)
-        new_pos[stay] = pos[stay]
-    return new_pos, new_th, stage

@@ -31,10 +31,10 @@ from citysim.config.kinds import AGENT_KINDS
 from citysim.world.agents import AgentState, AgentTraits, MemberState
 from citysim.world.behaviour import Layout, Mover, layout_for, plan_moves
 from citysim.world.geometry import Leg, Route, oriented_overlaps
-from citysim.world.street import Street, build_street
+from citysim.world.street import Street
 
 if TYPE_CHECKING:
-    from citysim.config.scenario import Scenario
+    pass
 
 __all__ = ["Leg", "Route", "World", "physics_process"]
 
@@ -62,11 +62,6 @@ class World:
         self.removed_count = 0
         self.blocked_moves = 0  # moves the last-resort overlap check cancelled (diagnostic)
         self._layout_cache: Layout | None = None
-
-    @classmethod
-    def from_scenario(cls, scenario: Scenario, rng: np.random.Generator) -> World:
-        """The world on the scenario's street (``build_street(scenario)``)."""
-        return cls(build_street(scenario), rng)
 
     # ------------------------------------------------------------------ public
     @property

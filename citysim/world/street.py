@@ -96,13 +96,6 @@ class Street:
             )
         return sidewalk.y_center_m - half - VERGE_STEP_M, sidewalk.y_center_m + half + ROAD_STEP_M
 
-    def zone_of(self, x_m: float) -> int:
-        """Index of the lamp whose zone holds x (clipped to the street)."""
-        for lamp in self.lamps:
-            if x_m < lamp.zone_end_m:
-                return lamp.index
-        return len(self.lamps) - 1
-
     @property
     def y_min_m(self) -> float:
         edges = [s.y_center_m - s.width_m / 2 for s in self.sidewalks] + [

@@ -31,14 +31,8 @@ from citysim.report.common import (
     warn_few_objects,
 )
 from citysim.report.html import write_report
-from citysim.report.run_plots import (
-    RUN_PLOTS,
-    draw_lag_cdf,
-    draw_lamp_levels,
-    lag_groups,
-    level_data,
-    plot_run,
-)
+from citysim.report.lag_cdf import draw_lag_cdf, lag_groups
+from citysim.report.run_plots import RUN_PLOTS, draw_lamp_levels, level_data, plot_run
 from citysim.report.runfacts import (
     RunFacts,
     load_summary,
