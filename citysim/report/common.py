@@ -33,6 +33,7 @@ __all__ = [
     "fmt_num",
     "fmt_pct",
     "fmt_quantity",
+    "plural",
     "read_csv",
     "save",
     "set_clock_axis",
@@ -146,6 +147,11 @@ def set_clock_axis(ax, start_hour: float | None, t0_s: float, t1_s: float) -> No
     ticks = np.arange(first, t1_s + 1e-9, step)
     ax.set_xticks(ticks, [clock_text(start_hour, t, seconds=step < 60) for t in ticks])
     ax.set_xlabel("clock time")
+
+
+def plural(n: int, word: str) -> str:
+    """'1 object', '2 objects': the word for a count."""
+    return word if n == 1 else word + "s"
 
 
 def fmt_num(value: float | None, digits: int = 3) -> str:

@@ -177,12 +177,20 @@ def run_facts(run_dir: Path, summary: dict, passages: list[dict]) -> RunFacts:
 
 
 def _controller_spec(facts: RunFacts, name: str):
-    scenario = facts.scenario
-    if scenario is None:
-        return None
-    from citysim.sim.loop import controller_spec
+    """The scenario's spec for a controller label, as the run resolved it (its registry defaults
+    when the scenario does not list it); None without the scenario.
 
-    return controller_spec(scenario, name)
+    Not ``citysim.sim.loop.controller_spec``: sim imports the run plots, and the report would
+    import it back.
+    """
+    if facts.scenario is None:
+        return None
+    from citysim.config.scenario import ControllerSpec
+
+    for spec in facts.scenario.controllers:
+        if name in (spec.display_name, spec.name):
+            return spec
+    return ControllerSpec(name=name)
 
 
 def _schedule_reason(facts: RunFacts, name: str) -> str | None:

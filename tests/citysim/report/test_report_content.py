@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from citysim.report import run_plots
+from citysim.report import lag_cdf, run_plots
 from citysim.report.captions import caption_for
 from citysim.report.common import (
     FEW_OBJECTS,
@@ -31,14 +31,8 @@ from citysim.report.common import (
     warn_few_objects,
 )
 from citysim.report.html import write_report
-from citysim.report.run_plots import (
-    RUN_PLOTS,
-    draw_lag_cdf,
-    draw_lamp_levels,
-    lag_groups,
-    level_data,
-    plot_run,
-)
+from citysim.report.lag_cdf import draw_lag_cdf, lag_groups
+from citysim.report.run_plots import RUN_PLOTS, draw_lamp_levels, level_data, plot_run
 from citysim.report.runfacts import (
     RunFacts,
     load_summary,
@@ -180,6 +174,7 @@ def test_few_objects_warning_on_the_plots(run_copy, monkeypatch):
         return save(fig, path)
 
     monkeypatch.setattr(run_plots, "save", keep)
+    monkeypatch.setattr(lag_cdf, "save", keep)
     plot_run(run_copy)
     assert {name for name, _ in drawn} == set(RUN_PLOTS)
     for name, texts in drawn:
@@ -344,6 +339,7 @@ def test_every_legend_gives_the_number_of_objects(run_copy, monkeypatch):
         return save(fig, path)
 
     monkeypatch.setattr(run_plots, "save", keep)
+    monkeypatch.setattr(lag_cdf, "save", keep)
     plot_run(run_copy)
     assert {name for name, _ in legends} == set(RUN_PLOTS)
     for name, text in legends:
