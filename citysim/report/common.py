@@ -35,6 +35,7 @@ __all__ = [
     "fmt_num",
     "fmt_pct",
     "fmt_quantity",
+    "plural",
     "read_csv",
     "save",
     "set_clock_axis",
@@ -148,6 +149,11 @@ def set_clock_axis(ax, start_hour: float | None, t0_s: float, t1_s: float) -> No
     ax.set_xlabel("clock time")
 
 
+def plural(n: int, word: str) -> str:
+    """'1 object', '2 objects': the word for a count."""
+    return word if n == 1 else word + "s"
+
+
 def fmt_num(value: float | None, digits: int = 3) -> str:
     """A number for people: 5818.3 -> '5,818', 0.05466 -> '0.0547', 1.0 -> '1'; never '5.82e+03'.
 
@@ -244,12 +250,3 @@ def write_notes(plot_dir: Path, notes: list[str]) -> None:
         path.write_text("\n".join(notes) + "\n")
     elif path.exists():
         path.unlink()
-
-
-def objects_note(n_objects: int | None) -> str:
-    """'n=12 objects' for a legend title ('' when unknown)."""
-    return "" if n_objects is None else f"n={n_objects} {plural(n_objects, 'object')}"
-
-
-def plural(n: int, word: str) -> str:
-    return word if n == 1 else word + "s"

@@ -136,7 +136,10 @@ RUN_HEAD = ["controller", "energy", "savings vs always-on", "lag p50", "lag p95"
 def _run_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Path]]:
     from citysim.report.run_plots import plot_run
     from citysim.report.runfacts import (
-        detection_reading,
+        DETECTION_HEAD,
+        detection_figures,
+        detection_row,
+        detection_sentence,
         load_summary,
         read_passages,
         run_facts,
@@ -159,10 +162,12 @@ def _run_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Path
         intro += f'<div class="warning" role="alert">&#9888; {html.escape(warning)}</div>'
     reasons = "".join(f'<p class="reason">{html.escape(r)}</p>'
                       for r in zero_savings_reasons(folder, summary, facts).values())  # fmt: skip
-    readings = [detection_reading(n, f, passages, facts) for n, f in figures.items()]
-    detection = "".join(f'<p class="detection">{html.escape(r)}</p>' for r in readings if r)
-    if detection:
-        detection = "<h3>Per-frame detection against the crossings</h3>" + detection
+    found = [d for d in (detection_figures(n, f, passages) for n, f in figures.items()) if d]
+    detection = ""
+    if found:
+        detection = ("<h3>Per-frame detection against the crossings</h3>"
+                     f'<p class="detection">{html.escape(detection_sentence(found, facts))}</p>'
+                     + _table(DETECTION_HEAD, [detection_row(d) for d in found]))  # fmt: skip
     body = (intro + "<h2>Figures per controller</h2>" + _table(RUN_HEAD, _run_rows(figures))
             + f'<p class="howto">{html.escape(RUN_COLUMNS_HOWTO)}</p>' + verdict + reasons + detection)  # fmt: skip
     return body, paths

@@ -1,17 +1,34 @@
-"""The lag CDF figure: per class, the share of zone entries lit within a given lag, and the
-entries whose lamp never reached full while the object was in the zone, shown apart as bars
-(they have no lag to draw). Used by the run and the sweep plots; returns figures, not files."""
+"""The lag CDF of a run or sweep: share of zone entries lit within a given lag, per class, with
+the crossings never lit shown apart.
+
+A never-lit crossing has no lag: objects.csv writes its whole stay in the zone as lag_s
+(``runfacts.is_never_lit`` recognises it). Drawn as a lag it would stretch the curve to the
+longest stays and read as "lit late"; here each curve stops at the share of entries lit and a
+bar per controller beside it gives the share never lit.
+"""
 
 from __future__ import annotations
 
 import math
 from collections import defaultdict
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from citysim.report.common import TARGET_CLASSES, controller_color, ecdf, fmt_pct, plt, plural
+from citysim.report.common import (
+    TARGET_CLASSES,
+    controller_color,
+    ecdf,
+    fmt_pct,
+    plt,
+    plural,
+    save,
+    warn_few_objects,
+)
+
+__all__ = ["LagGroup", "draw_lag_cdf", "lag_groups", "object_counts", "plot_lag_cdf"]
 
 
 @dataclass
@@ -57,47 +74,70 @@ def object_counts(passages: list[dict]) -> dict[str, int]:
     return {c: len(v) for c, v in seen.items()}
 
 
+def plot_lag_cdf(passages: list[dict], controllers: list[str], path: Path, title_prefix: str,
+                 notes: list[str]) -> Path | None:  # fmt: skip
+    """One panel per target class: share of zone entries lit within x seconds, never-lit apart."""
+    groups = lag_groups(passages, controllers)
+    if not groups:
+        notes.append(
+            "lag_cdf.png skipped: no target object crossed a lamp zone (objects.csv empty or missing)"
+        )
+        return None
+    objects = object_counts(passages)
+    fig = draw_lag_cdf(groups, controllers, objects, f"{title_prefix}illumination lag per class")
+    warn_few_objects(fig, sum(objects.values()))
+    return save(fig, path)
+
+
 def draw_lag_cdf(groups: dict[str, dict[str, LagGroup]], controllers: list[str],
                  objects: dict[str, int], title: str) -> Figure:  # fmt: skip
-    """Per class: the CDF of lags of lit entries (it tops out at the share lit), and a bar per
-    controller beside it with the share never lit."""
+    """One row per class: the CDF of lags of lit entries (it tops out at the share lit), a bar per
+    controller beside it with the share never lit, and the legend to the right.
+
+    Rows, not columns: with every controller and three classes a row of panels is too wide to
+    read once the page scales it down."""
     classes = list(groups)
-    fig = plt.figure(figsize=(4.9 * len(classes) + 0.6, 4.0), layout="constrained")
-    grid = fig.add_gridspec(1, 2 * len(classes), width_ratios=[4.0, 1.3] * len(classes))
+    fig = plt.figure(figsize=(11.0, 3.1 * len(classes) + 0.9), layout="constrained")
+    grid = fig.add_gridspec(len(classes), 2, width_ratios=[4.0, 1.4])
     first = None
     for k, cls in enumerate(classes):
-        ax = fig.add_subplot(grid[0, 2 * k], sharey=first)
-        bars = fig.add_subplot(grid[0, 2 * k + 1], sharey=ax)
+        ax = fig.add_subplot(grid[k, 0], sharey=first)
+        bars = fig.add_subplot(grid[k, 1], sharey=ax)
         first = first or ax
         mine = {n: groups[cls][n] for n in controllers if n in groups[cls]}
-        lag_max = max((max(g.lit_lags_s) for g in mine.values() if g.lit_lags_s), default=0.0)
-        right = max(1.0, lag_max * 1.05)
-        for n, g in mine.items():
-            color = controller_color(n, controllers)
-            label = f"{n}: {fmt_pct(g.on_entry / g.entries, 0)} lit on entry"
-            if g.lit_lags_s:
-                x, y = ecdf(np.array(g.lit_lags_s))
-                y = y * len(g.lit_lags_s) / g.entries  # the curve ends at the share lit
-                ax.step(np.r_[0.0, x, right], np.r_[0.0, y, y[-1]], where="post", lw=1.5,
-                        color=color, label=label)  # fmt: skip
-            else:
-                ax.plot([0.0, right], [0.0, 0.0], lw=1.5, color=color, label=label)
+        _draw_lit_curves(ax, mine, controllers)
         n_entries = max(g.entries for g in mine.values())
         n_obj = objects.get(cls, 0)
         ax.set_title(f"{cls} (n={n_obj} {plural(n_obj, 'object')}, {n_entries} zone entries)",
                      fontsize=9)  # fmt: skip
-        ax.set_xlim(0, right)
-        ax.set_xlabel("illumination lag (s)")
-        ax.grid(alpha=0.3)
-        # under the panel: a CDF fills its lower right as often as its upper left
-        ax.legend(title=f"controller ({cls}: n={n_obj})", fontsize=7, title_fontsize=7,
-                  loc="upper center", bbox_to_anchor=(0.5, -0.2))  # fmt: skip
+        ax.set_ylabel("share of entries lit\nwithin lag", fontsize=8)
         _draw_never_lit(bars, mine, controllers)
-    first.set_ylabel("share of zone entries lit within lag")
+        # right of the bars: a CDF's corners are all taken by one curve or another
+        handles, labels = ax.get_legend_handles_labels()
+        bars.legend(handles, labels, title=f"controller ({cls}: n={n_obj})", fontsize=7,
+                    title_fontsize=7, loc="upper left", bbox_to_anchor=(1.04, 1.0))  # fmt: skip
     first.set_ylim(0, 1.05)
     fig.suptitle(f"{title} (0 = lit on entry)\ncurves: entries lit, by lag; bars: entries whose "
                  "lamp never reached full while the object was in the zone", fontsize=10)  # fmt: skip
     return fig
+
+
+def _draw_lit_curves(ax, groups: dict[str, LagGroup], controllers: list[str]) -> None:
+    lag_max = max((max(g.lit_lags_s) for g in groups.values() if g.lit_lags_s), default=0.0)
+    right = max(1.0, lag_max * 1.05)
+    for n, g in groups.items():
+        color = controller_color(n, controllers)
+        label = f"{n}: {fmt_pct(g.on_entry / g.entries, 0)} lit on entry"
+        if g.lit_lags_s:
+            x, y = ecdf(np.array(g.lit_lags_s))
+            y = y * len(g.lit_lags_s) / g.entries  # the curve ends at the share lit
+            ax.step(np.r_[0.0, x, right], np.r_[0.0, y, y[-1]], where="post", lw=1.5,
+                    color=color, label=label)  # fmt: skip
+        else:
+            ax.plot([0.0, right], [0.0, 0.0], lw=1.5, color=color, label=label)
+    ax.set_xlim(0, right)
+    ax.set_xlabel("illumination lag (s)", fontsize=8)
+    ax.grid(alpha=0.3)
 
 
 def _draw_never_lit(ax, groups: dict[str, LagGroup], controllers: list[str]) -> None:

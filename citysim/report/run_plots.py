@@ -10,11 +10,12 @@
   panels per controller (true levels, nothing shifted), with the object passages
   through each lamp's zone drawn under each level line by class;
 * ``lag_cdf.png``: share of zone entries lit within a given lag, per class, with the
-  crossings never lit shown apart as bars (they have no lag to draw).
+  crossings never lit shown apart as bars (they have no lag to draw); drawn by
+  ``citysim.report.lag_cdf``, which sweeps share.
 
 Every legend gives the number of objects behind it, and a run resting on fewer than
 ``FEW_OBJECTS`` objects gets a warning under each plot. Sweep plots live in
-``citysim.report.sweep_plots`` (which borrows this module's hourly bars and lag CDF)
+``citysim.report.sweep_plots`` (which borrows this module's hourly bars)
 and the HTML page in ``citysim.report.html``; neither is imported here, so the report
 package has no import circle. Every function returns the paths it wrote.
 """
@@ -38,7 +39,6 @@ from citysim.report.common import (
     controller_color,
     fmt_num,
     fmt_pct,
-    objects_note,
     plt,
     plural,
     read_csv,
@@ -48,7 +48,7 @@ from citysim.report.common import (
     write_notes,
 )
 from citysim.report.frontier import frontier_figure
-from citysim.report.lag_cdf import draw_lag_cdf, lag_groups, object_counts
+from citysim.report.lag_cdf import plot_lag_cdf
 from citysim.report.runfacts import RunFacts, load_summary, read_passages, run_facts
 
 __all__ = ["RUN_PLOTS", "PlotError", "load_summary", "plot_run", "read_passages"]
@@ -59,6 +59,11 @@ RUN_PLOTS = ("frontier.png", "energy.png", "energy_per_hour.png", "lamp_levels.p
 LEVEL_PLOT_LAMPS = 3
 LEVEL_PLOT_WINDOW_S = 600.0
 SPLIT_PARTS = (("luminaire", "luminaire"), ("standby", "driver standby"), ("sensing", "sensing"))
+
+
+def objects_note(n_objects: int | None) -> str:
+    """'n=12 objects' for a legend title ('' when unknown)."""
+    return "" if n_objects is None else f"n={n_objects} {plural(n_objects, 'object')}"
 
 
 def plot_run(run_dir: str | Path) -> list[Path]:
@@ -301,18 +306,3 @@ def _draw_passages(ax, data: LevelData, lamp: int) -> None:
                  if p["lamp"] == lamp and p["cls"] == cls]  # fmt: skip
         ax.broken_barh(spans, (-(j + 1) * ROW_H, ROW_H * 0.75), color=CLASS_COLORS[cls], alpha=0.55,
                        lw=0.3, edgecolor="black")  # fmt: skip
-
-
-def plot_lag_cdf(passages: list[dict], controllers: list[str], path: Path, title_prefix: str,
-                 notes: list[str]) -> Path | None:  # fmt: skip
-    """One panel per target class: share of zone entries lit within x seconds, never-lit apart."""
-    groups = lag_groups(passages, controllers)
-    if not groups:
-        notes.append(
-            "lag_cdf.png skipped: no target object crossed a lamp zone (objects.csv empty or missing)"
-        )
-        return None
-    objects = object_counts(passages)
-    fig = draw_lag_cdf(groups, controllers, objects, f"{title_prefix}illumination lag per class")
-    warn_few_objects(fig, sum(objects.values()))
-    return save(fig, path)

@@ -30,8 +30,11 @@ from citysim.report.common import (
 )
 
 __all__ = [
+    "DETECTION_HEAD",
     "RunFacts",
-    "detection_reading",
+    "detection_figures",
+    "detection_row",
+    "detection_sentence",
     "load_summary",
     "read_passages",
     "run_facts",
@@ -174,12 +177,20 @@ def run_facts(run_dir: Path, summary: dict, passages: list[dict]) -> RunFacts:
 
 
 def _controller_spec(facts: RunFacts, name: str):
-    scenario = facts.scenario
-    if scenario is None:
-        return None
-    from citysim.sim.loop import controller_spec
+    """The scenario's spec for a controller label, as the run resolved it (its registry defaults
+    when the scenario does not list it); None without the scenario.
 
-    return controller_spec(scenario, name)
+    Not ``citysim.sim.loop.controller_spec``: sim imports the run plots, and the report would
+    import it back.
+    """
+    if facts.scenario is None:
+        return None
+    from citysim.config.scenario import ControllerSpec
+
+    for spec in facts.scenario.controllers:
+        if name in (spec.display_name, spec.name):
+            return spec
+    return ControllerSpec(name=name)
 
 
 def _schedule_reason(facts: RunFacts, name: str) -> str | None:
@@ -237,31 +248,54 @@ def _hold_s(facts: RunFacts, name: str) -> float | None:
     return spec.hold_s if spec.hold_s is not None else facts.scenario.lamps.luminaire.hold_s
 
 
-def detection_reading(name: str, figures: dict, passages: list[dict], facts: RunFacts) -> str | None:
-    """The per-frame detection figures of a camera controller read against its zone crossings."""
+#: Columns of the report's detection table (``detection_row``).
+DETECTION_HEAD = ["controller", "per-frame TPR", "precision", "judged frames per pass",
+                  "passes with no detection", "zone entries lit while inside", "lit on entry"]  # fmt: skip
+
+
+def detection_figures(name: str, figures: dict, passages: list[dict]) -> dict | None:
+    """A camera controller's per-frame detection figures beside its zone crossings (None: no camera)."""
     det = figures.get("detection") or {}
     if not det.get("frames"):
         return None
-    tp, fn = det.get("tp") or 0, det.get("fn") or 0
     passes = det.get("object_passes") or 0
+    target_frames = (det.get("tp") or 0) + (det.get("fn") or 0)
     mine = [p for p in passages if p["controller"] == name and p["cls"] in TARGET_CLASSES]
-    lit = sum(not p["never_lit"] for p in mine)
-    on_entry = sum(p["lit_on_entry"] for p in mine)
-    hold = _hold_s(facts, name)
-    hold_text = f"its {fmt_num(hold)} s hold time" if hold is not None else "its hold time"
-    text = (f"{name}: per frame, the detector found {fmt_pct(det.get('tpr'))} of the targets in view "
-            f"(true-positive rate) and {fmt_pct(det.get('precision'))} of what it flagged was a target. ")  # fmt: skip
-    if passes:
-        text += (f"These count frames, not people: each pass of an object through a camera's view "
-                 f"gave about {fmt_num((tp + fn) / passes, 2)} judged frames ({fmt_num(tp + fn)} "
-                 f"target frames over {passes} passes), and one detection keeps a lamp lit for "
-                 f"{hold_text}, so a low per-frame rate can still light lamps in time. ")  # fmt: skip
-        missed = det.get("missed_passes")
-        if missed is not None:
-            text += (f"{missed} of {passes} passes ({fmt_pct(det.get('miss_rate'))}) had no "
-                     "detection in any frame. ")  # fmt: skip
-    if mine:
-        text += (f"What counts for people: {lit} of {len(mine)} zone entries "
-                 f"({fmt_pct(lit / len(mine))}) were lit while the object was in the zone, "
-                 f"{on_entry} of them already on entry.")  # fmt: skip
-    return text.strip()
+    return {"name": name, "tpr": det.get("tpr"), "precision": det.get("precision"),
+            "frames_per_pass": target_frames / passes if passes else None, "passes": passes,
+            "missed": det.get("missed_passes"), "miss_rate": det.get("miss_rate"),
+            "entries": len(mine), "lit": sum(not p["never_lit"] for p in mine),
+            "on_entry": sum(bool(p["lit_on_entry"]) for p in mine)}  # fmt: skip
+
+
+def detection_row(f: dict) -> list[str]:
+    """``detection_figures`` as a row under DETECTION_HEAD."""
+
+    def of(k: int | None, n: int) -> str:
+        return "-" if k is None or not n else f"{k} of {n} ({fmt_pct(k / n)})"
+
+    return [f["name"], fmt_pct(f["tpr"]), fmt_pct(f["precision"]), fmt_num(f["frames_per_pass"], 2),
+            of(f["missed"], f["passes"]), of(f["lit"], f["entries"]), of(f["on_entry"], f["entries"])]  # fmt: skip
+
+
+def _span(values: list[float], fmt) -> str:
+    lo, hi = min(values), max(values)
+    return fmt(lo) if fmt(lo) == fmt(hi) else f"{fmt(lo)} to {fmt(hi)}"
+
+
+def detection_sentence(found: list[dict], facts: RunFacts) -> str:
+    """Why a low per-frame true-positive rate still lights lamps in time, with this run's numbers."""
+    holds = {_hold_s(facts, f["name"]) for f in found}
+    hold = (f"its {fmt_num(holds.pop())} s hold time" if len(holds) == 1 and None not in holds
+            else "its hold time")  # fmt: skip
+    tprs = [f["tpr"] for f in found if f["tpr"] is not None]
+    frames = [f["frames_per_pass"] for f in found if f["frames_per_pass"] is not None]
+    text = "The per-frame figures count camera frames, not people"
+    if tprs:
+        text += f": the detector found {_span(tprs, fmt_pct)} of the targets in view frame by frame"
+    if frames:
+        text += (f", but each pass of an object through a camera's view gives about "
+                 f"{_span(frames, lambda v: fmt_num(v, 2))} judged frames")  # fmt: skip
+    return (text + f", and one detection keeps a lamp lit for {hold}, so a low per-frame rate "
+            "still lights lamps in time. What counts for people are the last two columns: zone "
+            "entries lit while the object was inside, and lit already on entry.")

@@ -42,7 +42,8 @@ from citysim.report.common import (
     write_notes,
 )
 from citysim.report.frontier import sweep_frontier_figure
-from citysim.report.run_plots import bars_per_hour, plot_lag_cdf
+from citysim.report.lag_cdf import plot_lag_cdf
+from citysim.report.run_plots import bars_per_hour
 from citysim.report.runfacts import read_passages
 
 __all__ = ["SWEEP_METRICS", "SweepTable", "plot_sweep"]

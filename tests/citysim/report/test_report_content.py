@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from citysim.report import run_plots
+from citysim.report import lag_cdf, run_plots
 from citysim.report.captions import caption_for
 from citysim.report.common import (
     FEW_OBJECTS,
@@ -174,6 +174,7 @@ def test_few_objects_warning_on_the_plots(run_copy, monkeypatch):
         return save(fig, path)
 
     monkeypatch.setattr(run_plots, "save", keep)
+    monkeypatch.setattr(lag_cdf, "save", keep)
     plot_run(run_copy)
     assert {name for name, _ in drawn} == set(RUN_PLOTS)
     for name, texts in drawn:
@@ -207,16 +208,19 @@ def test_without_the_scenario_file_the_report_says_what_it_does_not_know(run_dir
 
 
 def test_detection_figures_are_read_against_the_crossings():
-    from citysim.report.runfacts import detection_reading
+    from citysim.report.runfacts import detection_figures, detection_row, detection_sentence
 
     figures = {"detection": {"frames": 900, "tp": 100, "fn": 300, "tpr": 0.25, "precision": 0.9,
-                             "object_passes": 4, "missed_passes": 0, "miss_rate": 0.0}}  # fmt: skip
+                             "object_passes": 4, "missed_passes": 1, "miss_rate": 0.25}}  # fmt: skip
     passages = [{"controller": "detector", "cls": "pedestrian", "never_lit": False, "lit_on_entry": True}] * 3
-    text = detection_reading("detector", figures, passages, RunFacts("x", 60.0, 22.0))
-    assert "25.0 %" in text and "about 100 judged frames" in text
-    assert "hold time" in text and "a low per-frame rate can still light lamps in time" in text
-    assert "3 of 3 zone entries (100.0 %) were lit" in text
-    assert detection_reading("pir", {"detection": {}}, passages, RunFacts("x", 60.0, 22.0)) is None
+    passages += [{"controller": "detector", "cls": "pedestrian", "never_lit": True, "lit_on_entry": False}]
+    found = detection_figures("detector", figures, passages)
+    row = detection_row(found)
+    assert row == ["detector", "25.0 %", "90.0 %", "100", "1 of 4 (25.0 %)", "3 of 4 (75.0 %)", "3 of 4 (75.0 %)"]
+    text = detection_sentence([found], RunFacts("x", 60.0, 22.0))
+    assert "25.0 % of the targets in view" in text and "about 100 judged frames" in text
+    assert "hold time" in text and "a low per-frame rate still lights lamps in time" in text
+    assert detection_figures("pir", {"detection": {}}, passages) is None
 
 
 # --- lag CDF: never-lit crossings apart -------------------------------------------------------
@@ -335,6 +339,7 @@ def test_every_legend_gives_the_number_of_objects(run_copy, monkeypatch):
         return save(fig, path)
 
     monkeypatch.setattr(run_plots, "save", keep)
+    monkeypatch.setattr(lag_cdf, "save", keep)
     plot_run(run_copy)
     assert {name for name, _ in legends} == set(RUN_PLOTS)
     for name, text in legends:
