@@ -37,7 +37,7 @@ def test_every_kind_resolves_in_every_registry(name: str) -> None:
 
 
 def test_detector_classes_are_the_detectors() -> None:
-    from detector.training import CLASSES
+    from detector.classes import CLASSES
 
     assert DETECTOR_CLASSES == CLASSES == CONFUSION_CLASSES
 
