@@ -224,6 +224,20 @@ AGENT_KINDS: dict[str, AgentKind] = {
             # foxes and dogs stop now and then (every ~10 s of walking, for 1-4 s)
             shape="animal", pauses=Pauses(every_s=10.0, duration_s=(1.0, 4.0)),
         ),
+        AgentKind(
+            # a rider standing on a low deck, holding the handlebar of a steering column
+            name="e_scooter", is_target=True,
+            # The detector has no scooter class. An e-scooter is a rider on small wheels in the
+            # road at cycling speeds, so the lamps should answer it as they answer a cyclist
+            # (lamps ahead, hold): calling it a cyclist counts as right.
+            detector_class="cyclist", road_user=True,
+            sizes=Sizes(width_m=(0.4, 0.6), height_m=(1.6, 2.0), length_m=(1.0, 1.2)),
+            speed=SpeedDistribution.kmh(15.0, 25.0),
+            motion=_RIDER_MOTION,  # it brakes and swerves like a bicycle
+            # wheel circumference of a ~0.22 m (8.5-10 inch) wheel: the phase is the wheel's turn
+            body=Body("rigid", stride_m=(0.6, 0.8)), route="road_edge", spec="lit",
+            shape="e_scooter", beam="bike_lamp", lit_share=0.8, lamps_ahead=2, colour="#ff7f0e",
+        ),
     )
 }  # fmt: skip
 
