@@ -352,10 +352,9 @@ class DetectorConfirmed(DetectorPerFrame):
 class DetectorNetwork(DetectorConfirmed):
     """Confirmed detections are messaged to the lamps ahead, so they are lit before the object arrives.
 
-    Class-aware: a vehicle lights more lamps ahead than a pedestrian, held for its kind's hold_factor
-    (config.kinds; a car's half as long). The direction of travel comes from the detection's ground
-    position over the last frames; when it is unknown both neighbours are told. Notifications repeat
-    every ``repeat_s`` while the object is seen.
+    Class-aware: a vehicle lights more lamps ahead than a pedestrian, each held for its kind's
+    hold_factor (config.kinds: a car's half as long). Direction of travel: from the detection's ground
+    position over the last frames; unknown, both neighbours are told. Repeats every ``repeat_s``.
     """
 
     name = "detector_network"
