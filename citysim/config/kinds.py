@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from citysim.config.motion import MotionParams, SpeedDistribution
+from detector.classes import CLASSES, TABLE1, SizeRange
 
 __all__ = [
     "AGENT_KINDS",
@@ -31,30 +32,16 @@ __all__ = [
     "kind_of",
 ]
 
-#: The detector's classes (``detector.training.CLASSES``, in its order): what a kind is scored
-#: as in the confusion metrics and what the detector reports to the controllers.
-DETECTOR_CLASSES = ("noise", "pedestrian", "group", "cyclist", "vehicle")
+#: The detector's classes, in its order: what a kind is scored as in the confusion metrics and
+#: what the detector reports to the controllers (the detector owns them).
+DETECTOR_CLASSES = CLASSES
 
+#: Ranges an agent's box is drawn from, (min, max) m; ``length_m`` along the heading.
+Sizes = SizeRange
 
-@dataclass(frozen=True)
-class Sizes:
-    """Ranges an agent's box is drawn from, (min, max) m; ``length_m`` is along the heading
-    (a walker's step, a bicycle's or a car's length)."""
-
-    width_m: tuple[float, float]
-    height_m: tuple[float, float]
-    length_m: tuple[float, float]
-
-
-#: paper Table 1: width x height x depth of the detector's target classes, m (depth: the
-#: extent along the heading; a walker's is one step). The one copy of these numbers in
-#: citysim; the detector package will own them.
-TABLE1_SIZES_M = {
-    "pedestrian": Sizes((0.3, 0.64), (1.15, 2.0), (0.3, 0.79)),
-    "group": Sizes((1.2, 3.0), (1.5, 2.0), (0.3, 0.79)),
-    "cyclist": Sizes((0.3, 0.64), (1.5, 1.9), (1.5, 1.7)),
-    "vehicle": Sizes((1.4, 1.8), (1.4, 2.0), (3.7, 4.6)),
-}
+#: paper Table 1: width x height x depth of the detector's target classes, m: the detector's
+#: own table (``detector.classes.TABLE1``), the one copy of these numbers.
+TABLE1_SIZES_M = {name: TABLE1[name] for name in CLASSES[1:]}
 
 
 @dataclass(frozen=True)
@@ -223,6 +210,20 @@ AGENT_KINDS: dict[str, AgentKind] = {
             body=Body("rigid", stride_m=(0.6, 1.0)), route="verge_wander", spec="plain",
             # foxes and dogs stop now and then (every ~10 s of walking, for 1-4 s)
             shape="animal", pauses=Pauses(every_s=10.0, duration_s=(1.0, 4.0)),
+        ),
+        AgentKind(
+            # a rider standing on a low deck, holding the handlebar of a steering column
+            name="e_scooter", is_target=True,
+            # The detector has no scooter class. An e-scooter is a rider on small wheels in the
+            # road at cycling speeds, so the lamps should answer it as they answer a cyclist
+            # (lamps ahead, hold): calling it a cyclist counts as right.
+            detector_class="cyclist", road_user=True,
+            sizes=Sizes(width_m=(0.4, 0.6), height_m=(1.6, 2.0), length_m=(1.0, 1.2)),
+            speed=SpeedDistribution.kmh(15.0, 25.0),
+            motion=_RIDER_MOTION,  # it brakes and swerves like a bicycle
+            # wheel circumference of a ~0.22 m (8.5-10 inch) wheel: the phase is the wheel's turn
+            body=Body("rigid", stride_m=(0.6, 0.8)), route="road_edge", spec="lit",
+            shape="e_scooter", beam="bike_lamp", lit_share=0.8, lamps_ahead=2, colour="#ff7f0e",
         ),
     )
 }  # fmt: skip

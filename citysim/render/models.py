@@ -25,11 +25,15 @@ from citysim.config.kinds import AGENT_KINDS
 from citysim.render.outline import KnownTopology, model_topology
 from citysim.world.agents import AgentState
 from detector.train.shapes import (
+    Parts,
     Shape,
     animal_shape,
+    box,
     cyclist_shape,
     group_shape,
+    octagon,
     pedestrian_shape,
+    slab,
     vehicle_shape,
 )
 
@@ -73,7 +77,64 @@ def _group_key(a: AgentState, phase: PhaseMap) -> tuple:
     )
 
 
-#: Model name (``AgentKind.shape``) -> its 3D model (the detector's own shapes).
+#: E-scooter wheels: 8.5-10 inch tyres, m.
+SCOOTER_WHEEL_RADIUS_M = 0.11
+#: Top of the deck the rider stands on, its thickness and half width, m.
+SCOOTER_DECK_TOP_M, SCOOTER_DECK_THICK_M, SCOOTER_DECK_HALF_W_M = 0.15, 0.05, 0.08
+
+
+def e_scooter_shape(width_m: float, height_m: float, length_m: float) -> Shape:
+    """A rider standing on an e-scooter, at the origin heading +x (11 parts): two small wheels,
+    a low deck and a steering column (frame), the handlebar, and the rider, legs together on
+    the deck, leaning a little forward, arms reaching forward and down to the handlebar.
+
+    Rear tyre to front tyre = ``length_m``; handlebar width = ``width_m``; top of the rider's
+    head = ``height_m``. Built from the parts of ``detector.train.shapes`` like the detector's own
+    models; the rider has a walker's proportions (hips at 0.48, shoulders at 0.85 of the
+    rider's height above the deck).
+    """
+    w, h = width_m, height_m
+    parts = Parts()
+    r = SCOOTER_WHEEL_RADIUS_M
+    f_rear, f_front = -length_m / 2 + r, length_m / 2 - r
+    parts.add(octagon(f_rear, 0.0, r, r), "wheel")
+    parts.add(octagon(f_front, 0.0, r, r), "wheel")
+    z_deck, half_deck = SCOOTER_DECK_TOP_M, SCOOTER_DECK_HALF_W_M
+    deck_end = f_front - 0.12  # the deck stops short of the front wheel
+    parts.add(
+        box(f_rear, deck_end, -half_deck, half_deck, z_deck - SCOOTER_DECK_THICK_M, z_deck), "frame"
+    )
+    rider_h = h - z_deck
+    z_bar = z_deck + 0.55 * rider_h  # just above the rider's hips
+    f_bar = f_front - 0.08  # the column leans back from the front axle
+    parts.add(slab((f_front, 0.0, r), (f_bar, 0.0, z_bar), 0.025, 0.025), "frame")
+    parts.add(
+        box(f_bar - 0.03, f_bar + 0.03, -w / 2, w / 2, z_bar - 0.03, z_bar + 0.03), "handlebar"
+    )
+
+    z_hip, z_shoulder, z_neck = (z_deck + k * rider_h for k in (0.48, 0.85, 0.87))
+    f_feet = f_rear + 0.4 * (deck_end - f_rear)
+    f_shoulder = f_feet + 0.08  # leaning toward the handlebar
+    for side in (-1.0, 1.0):  # legs together: side by side, touching
+        lat = side * 0.065
+        parts.add(
+            slab((f_feet, lat, z_deck), (f_feet, lat, z_hip + 0.02 * rider_h), 0.06, 0.06), "leg"
+        )
+    torso_d = min(0.36 * w, 0.22)
+    parts.add(slab((f_feet, 0.0, z_hip), (f_shoulder, 0.0, z_neck), torso_d / 2, 0.32 * w), "torso")
+    head_w = min(0.32 * w, 0.2)
+    parts.add(box(f_shoulder - 0.1, f_shoulder + 0.1, -head_w / 2, head_w / 2, z_neck, h), "head")
+    shoulder_w = 0.8 * w
+    for side in (-1.0, 1.0):
+        hand = (f_bar, side * (w / 2 - 0.06), z_bar)
+        parts.add(
+            slab(hand, (f_shoulder, side * (shoulder_w / 2 - 0.05), z_shoulder), 0.04, 0.04), "arm"
+        )
+    return parts.place(0.0, 0.0, 0.0)
+
+
+#: Model name (``AgentKind.shape``) -> its 3D model (the detector's own shapes, and the
+#: e-scooter built here from the detector's parts).
 AGENT_MODELS: dict[str, AgentModel] = {
     "pedestrian": AgentModel(
         lambda a, phase: ("pedestrian", a.width_m, a.height_m, a.length_m, phase(a.gait_phase_rad)),
@@ -91,6 +152,11 @@ AGENT_MODELS: dict[str, AgentModel] = {
     "animal": AgentModel(
         lambda a, phase: ("animal", a.width_m, a.height_m, a.length_m, phase(a.gait_phase_rad)),
         lambda k: animal_shape(0.0, 0.0, 0.0, *k[1:]),
+    ),
+    # its wheels' turn does not show in a 320x240 frame: the phase is not part of the key
+    "e_scooter": AgentModel(
+        lambda a, phase: ("e_scooter", a.width_m, a.height_m, a.length_m),
+        lambda k: e_scooter_shape(*k[1:]),
     ),
 }
 
@@ -212,6 +278,7 @@ def prepare_models() -> None:
         ("cyclist", 0.6, 1.8, 1.7, 1.0),
         ("vehicle", 1.8, 1.5, 4.4),
         ("animal", 0.3, 0.5, 0.8, 1.0),
+        ("e_scooter", 0.5, 1.8, 1.1),
     )
     for key in typical:
         if key[0] in AGENT_MODELS:
