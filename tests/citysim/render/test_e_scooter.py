@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from tests.citysim.test_render import CAM_X, CAM_Y, PINHOLE, box_iou, changed_box, renderer
+from tests.citysim.render.test_camera import CAM_X, CAM_Y, PINHOLE, box_iou, changed_box, renderer
 
 from citysim.render.beams import BEAMS, beam_of
 from citysim.render.models import agent_shape, e_scooter_shape

@@ -15,16 +15,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import simpy
 
 from citysim.config.kinds import AGENT_KINDS
 from citysim.config.scenario import load_scenario, override
 from citysim.metrics.confusion import iou_matrix
-from citysim.render.camera import CameraRenderer
-from citysim.sim.loop import render_params_of, seed_streams
-from citysim.world.physics import World
-from citysim.world.street import build_street
-from citysim.world.traffic import start_traffic
+from citysim.sim.night import build_night
 from detector.detector import Detector
 from detector.general_model import default_model
 
@@ -51,22 +46,15 @@ def _frames(lit: bool):
             ],
         },
     )  # fmt: skip
-    rngs = seed_streams(scenario.seed)
-    street = build_street(scenario)
-    camera = street.lamps[0].camera  # sees scooters coming from the far end and those leaving
-    world = World(street, rngs["world"])
-    env = simpy.Environment()
-    start_traffic(env, world, scenario, rngs["traffic"])
-    renderer = CameraRenderer(camera, street, render_params_of(scenario), rngs["render"])
+    night = build_night(scenario)  # the night a run builds: its traffic, its camera streams
+    night.start_physics()
+    renderer = night.renderer(0)  # sees scooters coming from the far end and those leaving
+    camera = renderer.camera
     detector = Detector(camera, model=default_model())
-    levels = np.full(len(street.lamps), scenario.lamps.luminaire.dim_level)
-    dt = 1.0 / scenario.physics_hz
-    steps_per_frame = round(scenario.physics_hz / camera.fps)
+    levels = np.full(night.n_lamps, scenario.lamps.luminaire.dim_level)
     for k in range(int(scenario.duration_s * camera.fps)):
-        for _ in range(steps_per_frame):
-            env.run(until=env.now + dt)
-            world.step(dt)
-        frame = renderer.render(k / camera.fps, world.states(), levels, frame_index=k)
+        night.run_until(k / camera.fps + 1e-6)
+        frame = renderer.render(k / camera.fps, night.agents, levels, frame_index=k)
         detections = detector.process(frame.image)
         if k < camera.fps:
             continue

@@ -14,9 +14,8 @@ from citysim.config.kinds import AGENT_KINDS
 from citysim.config.motion import KMH_PER_MPS
 from citysim.config.scenario import load_scenario, override
 from citysim.config.traffic import TRAFFIC_SPECS
-from citysim.sim.loop import seed_streams
+from citysim.sim.night import build_night
 from citysim.world.agents import draw_agent
-from citysim.world.physics import World
 from citysim.world.street import build_street
 from citysim.world.traffic import draw_arrival, start_traffic
 
@@ -66,18 +65,15 @@ def test_in_the_world_it_stays_on_the_road_and_walkers_give_way(scenario) -> Non
         {f"traffic.classes.{k}.rate_per_hour": 0.0 for k in AGENT_KINDS}
         | {"traffic.classes.e_scooter.rate_per_hour": 600.0, "traffic.scripted": []},
     )
-    rngs = seed_streams(busy.seed)
-    street = build_street(busy)
-    world = World(street, rngs["world"])
-    env = simpy.Environment()
-    start_traffic(env, world, busy, rngs["traffic"])
+    night = build_night(busy)
+    street, world = night.street, night.world
+    night.start_physics()
     road_lo = min(ln.y_center_m - ln.width_m / 2 for ln in street.lanes)
     road_hi = max(ln.y_center_m + ln.width_m / 2 for ln in street.lanes)
     dt, seen = 1.0 / busy.physics_hz, set()
-    for _ in range(int(60 * busy.physics_hz)):
-        env.run(until=env.now + dt)
-        world.step(dt)
-        for a in world.states():
+    for k in range(1, int(60 * busy.physics_hz) + 1):
+        night.run_until(k * dt + 1e-6)
+        for a in night.agents:
             assert a.cls == "e_scooter"
             assert road_lo <= a.y_m - a.width_m / 2 and a.y_m + a.width_m / 2 <= road_hi
             assert a.speed_mps <= SPEED_KMH[1] / KMH_PER_MPS + 1e-9
