@@ -16,6 +16,7 @@ file and the dotted field path.
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import itertools
 import json
@@ -214,7 +215,9 @@ def _format_errors(exc: ValidationError) -> str:
         where = ".".join(str(p) for p in err["loc"]) or "(top level)"
         msg = err["msg"].removeprefix("Value error, ")
         if err["type"] == "extra_forbidden":
-            msg = f"unknown field; valid: {', '.join(SweepSpec.model_fields)}"
+            near = difflib.get_close_matches(str(err["loc"][-1]), list(SweepSpec.model_fields), n=3)
+            hint = f"did you mean {' or '.join(near)}?" if near else f"valid: {', '.join(SweepSpec.model_fields)}"
+            msg = f"unknown field; {hint}"
         parts.append(f"{where}: {msg}")
     return "; ".join(parts)
 
@@ -238,7 +241,9 @@ def scenario_path_problem(dotted: str) -> str | None:
         if isinstance(node, type) and issubclass(node, BaseModel):
             if key not in node.model_fields:
                 where = ".".join(walked) or "the scenario"
-                return f"{key!r} is not a field of {where}; valid: {', '.join(node.model_fields)}"
+                near = difflib.get_close_matches(key, list(node.model_fields), n=3)
+                hint = f"did you mean {' or '.join(near)}?" if near else f"valid: {', '.join(node.model_fields)}"
+                return f"{key!r} is not a field of {where}; {hint}"
             node = node.model_fields[key].annotation
         elif origin in (tuple, list):
             if not key.isdigit():

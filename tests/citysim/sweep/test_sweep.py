@@ -258,7 +258,7 @@ def test_sweep_plots_and_report(local_sweep):
     [
         (
             {"axes": {"lamps.camera.heigth_m": [2, 4]}},
-            "axes.lamps.camera.heigth_m: 'heigth_m' is not a field",
+            "axes.lamps.camera.heigth_m: 'heigth_m' is not a field of lamps.camera; did you mean height_m?",
         ),
         (
             {"axes": {"lamps.spacing_m": []}},
@@ -267,6 +267,7 @@ def test_sweep_plots_and_report(local_sweep):
         ({"seeds": [1, 1]}, "seeds: seeds must be distinct"),
         ({"controllers": ["always_on", "lighthouse"]}, "controllers.1.name: unknown 'lighthouse'"),
         ({"colour": "red"}, "colour: unknown field"),
+        ({"controlers": ["always_on"]}, "controlers: unknown field; did you mean controllers?"),
         ({"axes": {"seed": [1, 2]}}, "axes.seed: use the sweep's own `seeds` key"),
         ({"base": "missing.yaml"}, "scenario file not found"),
         ({"set": {"lamps.count": 0}}, "lamps.count"),
