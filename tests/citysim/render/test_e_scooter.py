@@ -7,11 +7,11 @@ import math
 
 import numpy as np
 import pytest
-from tests.citysim.render.test_camera import CAM_X, CAM_Y, PINHOLE, box_iou, changed_box, renderer
 
 from citysim.render.beams import BEAMS, beam_of
 from citysim.render.models import agent_shape, e_scooter_shape
 from citysim.world.agents import AgentState
+from tests.citysim.render.test_camera import CAM_X, CAM_Y, PINHOLE, box_iou, changed_box, renderer
 
 SIZES = ((0.4, 1.6, 1.0), (0.5, 1.8, 1.1), (0.6, 2.0, 1.2))  # width, height, length, m
 

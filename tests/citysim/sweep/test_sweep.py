@@ -258,7 +258,7 @@ def test_sweep_plots_and_report(local_sweep):
     [
         (
             {"axes": {"lamps.camera.heigth_m": [2, 4]}},
-            "axes.lamps.camera.heigth_m: 'heigth_m' is not a field of lamps.camera; did you mean height_m?",
+            "axes.lamps.camera.heigth_m: 'heigth_m' is not a field of lamps.camera; did you mean height_m",
         ),
         (
             {"axes": {"lamps.spacing_m": []}},
