@@ -72,11 +72,13 @@ class Detector:
     """Per-camera detector: owns the background model and the tracker.
 
     ``crop_to_range``: segment only the rows (and columns) of the frame where a target within
-    ``max_distance_m`` can appear (``detector.roi.range_crop``, the crop in ``self.crop``);
+    ``max_distance_m`` can appear (``detector.roi.range_crop``, the crop in ``self.crop``); every
+    target within range is then detected as on the full frame (same box, features and class);
+    only regions reaching above the band (beyond range, or taller than any target) are dropped.
     False: the whole frame, as the paper's implementation does. ``equalise_tiles_only``: run
-    CLAHE only on the full frame's tiles the crop needs (faster; equalised values 1 DN apart on
-    about 0.1 % of the pixels, so now and then a box a pixel or two off the full frame's) rather
-    than on the whole frame (detections exactly the full frame's).
+    CLAHE only on the full frame's tiles the crop needs rather than on the whole frame (faster;
+    equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel or
+    two off the full frame's).
     """
 
     def __init__(

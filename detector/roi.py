@@ -231,7 +231,7 @@ def range_crop(
     h, w = camera.height_px, camera.width_px
     bounds = band_bounds_px(camera, max_distance_m)
     margin = _DISTORTION_MARGIN_PX + morphology_margin_px(open_kernel_px, dilate_iterations)
-    # no ground within range in view: keep the bottom rows, where the nearest ground is
+    # no part of a target within range in view (it would stand below the frame): the bottom rows
     first, left, right = bounds if bounds is not None else (h - 1, 0, w)
     top = max(0, first - margin)
     left, right = max(0, left - margin), min(w, right + margin)

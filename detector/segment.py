@@ -217,7 +217,6 @@ class Segmenter:
 
     def _use_crop(self, crop: Crop) -> None:
         """Buffers, CLAHE grid and edge limits for frames of ``crop``'s frame size."""
-        self._active = crop
         self._frame_shape = (crop.frame_height_px, crop.frame_width_px)
         self._clahe_part = crop.clahe_slices
         self._clahe = cv2.createCLAHE(

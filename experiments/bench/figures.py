@@ -151,9 +151,11 @@ def bench_detector(n_frames: int = 300) -> dict:
         pipelines = {key: det.process for key, det in detectors.items()}
         ms = interleaved_cpu_ms(frames, {**pipelines, "floor": OpenCVFloor().process})
         mem = peak_memory_mb(Detector(camera, model=model).process, frames[:100])
+        crop = detectors["crop"].crop
         print(
-            f"{name} ({camera.width_px}x{camera.height_px}): OpenCV floor "
-            f"{1000 / ms['floor']:6.1f} frames/s; detector peak Python heap {mem:.2f} MB"
+            f"{name} ({camera.width_px}x{camera.height_px}, crop rows {crop.top_px}-"
+            f"{crop.bottom_px - 1}): OpenCV floor {1000 / ms['floor']:6.1f} frames/s; "
+            f"detector peak Python heap {mem:.2f} MB"
         )
         out[name] = {"floor_ms": ms["floor"], "peak_mb": mem}
         for key, det in detectors.items():
