@@ -61,6 +61,7 @@ class RegionGeometry:
         self.distorted = camera.has_distortion
         self._intrinsic = camera.intrinsic_matrix
         self._distortion = camera.distortion
+        self._identity = np.eye(3)  # the rectification of undistortPointsIter, made once
 
     # ------------------------------------------------------------ undistortion
     def undistort(self, uv_px: np.ndarray) -> np.ndarray:
@@ -71,7 +72,7 @@ class RegionGeometry:
             uv_px.reshape(-1, 1, 2),
             self._intrinsic,
             self._distortion,
-            np.eye(3),
+            self._identity,
             self._intrinsic,
             _UNDISTORT_CRITERIA,
         )

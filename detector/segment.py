@@ -6,13 +6,30 @@ One grayscale frame in, the moving regions of that frame out:
     -> external contours -> bounding boxes and contour areas -> size/extent filter
 
 Conventions: boxes are OpenCV ``boundingRect`` tuples ``(x, y, w, h)`` in
-pixels (pixel centres on integers, so the box covers columns x .. x + w - 1);
-contour areas come from Green's theorem over the contour vertices, exactly what
-``cv2.contourArea`` returns (a filled w x h rectangle has area (w-1)(h-1)).
+pixels of the full frame (pixel centres on integers, so the box covers columns
+x .. x + w - 1); contour areas come from Green's theorem over the contour
+vertices, exactly what ``cv2.contourArea`` returns (a filled w x h rectangle
+has area (w-1)(h-1)).
+
+A segmenter may work on a ``detector.roi.Crop`` of the frame only (the detector
+gives it the band where a target within range can appear): MOG2, the morphology
+and the contours run on the crop, CLAHE on the crop and the few rows of the full
+frame's tiles above it that its interpolation needs; contours are traced with
+the crop's offset so boxes and contours are in full-frame pixels, and regions
+touching a crop edge that is not a frame edge are flagged ``cut_by_crop`` rather
+than ``touches_border``. Without a crop it works on whole frames of any size.
 
 The reference values (CLAHE clip limit 3 on an 8 x 8 tile grid, MOG2 variance
 threshold 16 with shadow detection, shadows cut at 170, a 3 x 3 elliptic
 opening, one extra dilation) are those of the paper's published implementation.
+MOG2's history is a time, so cameras of any frame rate forget alike: 500 frames
+at the 15 frames/s camera default.
+
+Savings that change no output: MOG2 writes shadows straight as the cut would
+leave them (``setShadowValue`` 0, or 255 for a cut below MOG2's shadow value
+127), so no threshold pass is needed; a frame where MOG2 finds nothing skips
+the morphology and the contours; and the equalised image and the mask are
+buffers kept across frames (``Regions.mask`` is rewritten by the next frame).
 """
 
 from __future__ import annotations
@@ -22,27 +39,37 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from detector.roi import Crop, full_frame
+
 # below this many contours a Python loop over cv2 calls beats the vectorised path (measured: 40 contours ~ equal)
 _FEW_CONTOURS = 32
 # the regions of a frame where nothing moved, shared: zero-size arrays hold nothing to change
 _NO_BOXES = np.zeros((0, 4), np.int32)
 _NO_AREAS = np.zeros(0, np.float64)
 _NO_FLAGS = np.zeros(0, bool)
+#: Frame rate the default history was set for (``CameraModel``'s default), frames/s.
+REFERENCE_FPS = 15.0
+#: MOG2's history, s: the paper implementation's 500 frames at ``REFERENCE_FPS``.
+DEFAULT_HISTORY_S = 500 / REFERENCE_FPS
+# MOG2 writes shadows as this value (its default; the shadow cut is defined against it)
+_MOG2_SHADOW_VALUE = 127
 
 
 @dataclass(frozen=True)
 class SegmenterParams:
     """Segmentation settings; defaults are the paper implementation's values.
 
-    ``clahe_tile_px`` is OpenCV's ``tileGridSize``: the number of tiles per image
-    side (8 -> an 8 x 8 grid, i.e. 40 x 30 px tiles on a 320 x 240 frame).
-    ``min_area_fraction`` is a fraction of the frame area; ``min_extent`` is
-    contour area / bounding-box area. ``learning_rate`` is MOG2's (-1: automatic).
+    ``clahe_tile_px`` is OpenCV's ``tileGridSize`` on the full frame: the number of
+    tiles per image side (8 -> an 8 x 8 grid, i.e. 40 x 30 px tiles on a 320 x 240
+    frame); a crop is equalised on the full frame's tiles that it needs.
+    ``mog2_history_s`` is MOG2's history in seconds (frames = seconds x the camera's
+    frames/s). ``min_area_fraction`` is a fraction of the frame area; ``min_extent``
+    is contour area / bounding-box area. ``learning_rate`` is MOG2's (-1: automatic).
     """
 
     clahe_clip_limit: float = 3.0
     clahe_tile_px: int = 8
-    mog2_history: int = 500
+    mog2_history_s: float = DEFAULT_HISTORY_S
     mog2_var_threshold: float = 16.0
     detect_shadows: bool = True
     shadow_cut: int = 170
@@ -60,11 +87,7 @@ class SegmenterParams:
                 _is_int(self.clahe_tile_px) and self.clahe_tile_px >= 1,
                 "an integer >= 1",
             ),
-            (
-                "mog2_history",
-                _is_int(self.mog2_history) and self.mog2_history >= 1,
-                "an integer >= 1",
-            ),
+            ("mog2_history_s", self.mog2_history_s > 0, "> 0 s"),
             ("mog2_var_threshold", self.mog2_var_threshold > 0, "> 0"),
             (
                 "shadow_cut",
@@ -95,6 +118,10 @@ class SegmenterParams:
                     f"SegmenterParams.{name} must be {valid}, got {getattr(self, name)!r}"
                 )
 
+    def history_frames(self, fps: float) -> int:
+        """MOG2's history in frames for a camera taking ``fps`` frames/s (at least 1)."""
+        return max(1, round(self.mog2_history_s * fps))
+
 
 def _is_int(value: object) -> bool:
     return isinstance(value, int | np.integer) and not isinstance(value, bool)
@@ -102,13 +129,17 @@ def _is_int(value: object) -> bool:
 
 @dataclass(frozen=True)
 class Regions:
-    """The moving regions of one frame.
+    """The moving regions of one frame, in full-frame pixels.
 
     Regions below the size or extent limits are gone; regions touching the frame
     border are kept but flagged in ``touches_border`` (the detector skips them:
-    their shape is cut by the border). ``foreground_fraction`` counts foreground
-    pixels after the shadow cut and the opening, before the joining dilation.
-    ``mask`` (uint8, 0 or 255) is the final mask the contours were traced on.
+    their shape is cut by the border); regions touching an edge of the crop the
+    segmenter works on, where it is not the frame's edge, are flagged in
+    ``cut_by_crop`` (None: no region is). ``foreground_fraction`` is the share of
+    the processed pixels (the crop's) that are foreground after the shadow cut and
+    the opening, before the joining dilation. ``mask`` (uint8, 0 or 255, the full
+    frame's shape; 0 outside the crop) is the final mask the contours were traced
+    on: the segmenter's buffer, rewritten by its next frame (copy it to keep it).
     """
 
     boxes_px: np.ndarray  # (N, 4) int32 x, y, w, h
@@ -117,6 +148,7 @@ class Regions:
     touches_border: np.ndarray  # (N,) bool
     foreground_fraction: float
     mask: np.ndarray = field(repr=False)  # (H, W) uint8
+    cut_by_crop: np.ndarray | None = None  # (N,) bool
 
     def __len__(self) -> int:
         return len(self.boxes_px)
@@ -125,6 +157,13 @@ class Regions:
     def extents(self) -> np.ndarray:
         """Contour area / bounding-box area, (N,)."""
         return self.areas_px / np.maximum(self.boxes_px[:, 2] * self.boxes_px[:, 3], 1)
+
+    @property
+    def unusable(self) -> np.ndarray:
+        """(N,) bool: regions whose shape is cut, by the frame's border or by the crop."""
+        if self.cut_by_crop is None:
+            return self.touches_border
+        return self.touches_border | self.cut_by_crop
 
     @classmethod
     def empty(cls, height_px: int, width_px: int) -> Regions:
@@ -135,27 +174,70 @@ class Regions:
             touches_border=np.zeros(0, bool),
             foreground_fraction=0.0,
             mask=np.zeros((height_px, width_px), np.uint8),
+            cut_by_crop=np.zeros(0, bool),
         )
 
 
 class Segmenter:
-    """Stateful per-camera segmenter: owns the MOG2 background model."""
+    """Stateful per-camera segmenter: owns the MOG2 background model and the frame buffers.
 
-    def __init__(self, params: SegmenterParams = SegmenterParams()) -> None:
+    ``fps``: the camera's frame rate, frames/s, which turns the history in seconds
+    into frames. ``crop``: work on this part of frames of its frame size only
+    (``detector.roi.range_crop``); None: on whole frames of any size.
+    """
+
+    def __init__(
+        self,
+        params: SegmenterParams = SegmenterParams(),
+        fps: float = REFERENCE_FPS,
+        crop: Crop | None = None,
+    ) -> None:
         if not isinstance(params, SegmenterParams):
             raise TypeError(
                 f"Segmenter params must be a SegmenterParams, got {type(params).__name__}"
             )
+        if not (isinstance(fps, int | float) and fps > 0):
+            raise ValueError(f"Segmenter fps must be > 0 frames/s, got {fps!r}")
+        if crop is not None and not isinstance(crop, Crop):
+            raise TypeError(f"Segmenter crop must be a detector.roi.Crop, got {type(crop).__name__}")
         self.params = params
-        self._clahe = cv2.createCLAHE(
-            clipLimit=params.clahe_clip_limit,
-            tileGridSize=(params.clahe_tile_px, params.clahe_tile_px),
-        )
+        self.fps = float(fps)
+        self.history_frames = params.history_frames(self.fps)
         self._kernel = cv2.getStructuringElement(
             cv2.MORPH_ELLIPSE, (params.open_kernel_px, params.open_kernel_px)
         )
+        # MOG2 writes shadows as the cut leaves them: no threshold pass
+        self._shadow_value = 255 if _MOG2_SHADOW_VALUE > params.shadow_cut else 0
+        self.crop = crop
+        self._frame_shape: tuple[int, int] | None = None
+        if crop is not None:
+            self._use_crop(crop)
         self._mog2: cv2.BackgroundSubtractorMOG2
         self.reset()
+
+    def _use_crop(self, crop: Crop) -> None:
+        """Buffers, CLAHE grid and edge limits for frames of ``crop``'s frame size."""
+        self._frame_shape = (crop.frame_height_px, crop.frame_width_px)
+        self._clahe_part = crop.clahe_slices
+        self._clahe = cv2.createCLAHE(
+            clipLimit=self.params.clahe_clip_limit, tileGridSize=crop.clahe_tiles
+        )
+        top, bottom, left, right = crop.clahe_px
+        self._equalised = np.empty((bottom - top, right - left), np.uint8)
+        self._equalised_crop = self._equalised[crop.slices_in_clahe]
+        self._mask = np.zeros(self._frame_shape, np.uint8)
+        self._fg = self._mask[crop.slices]
+        self._frame_px = crop.frame_height_px * crop.frame_width_px
+        self._crop_px = crop.height_px * crop.width_px
+        self._min_area_px = self.params.min_area_fraction * self._frame_px
+        # a region is cut where it reaches a crop edge; by the frame where that edge is the frame's
+        self._lo = (crop.left_px, crop.top_px)
+        self._hi = (crop.right_px, crop.bottom_px)
+        self._cropped = not crop.is_full_frame
+        self._lo_is_frame = np.array([crop.left_px == 0, crop.top_px == 0])
+        self._hi_is_frame = np.array(
+            [crop.right_px == crop.frame_width_px, crop.bottom_px == crop.frame_height_px]
+        )
 
     def automatic_learning_rate(self, frames_before: int) -> float:
         """The rate MOG2 picks itself for a frame with ``frames_before`` frames before it since the
@@ -163,7 +245,7 @@ class Segmenter:
         counting this frame."""
         if frames_before <= 0:
             return 1.0
-        return 1.0 / min(2 * (frames_before + 1), self.params.mog2_history)
+        return 1.0 / min(2 * (frames_before + 1), self.history_frames)
 
     def reset(self) -> None:
         """Forget the background: the next frame becomes the new background.
@@ -174,10 +256,11 @@ class Segmenter:
         """
         p = self.params
         self._mog2 = cv2.createBackgroundSubtractorMOG2(
-            history=p.mog2_history,
+            history=self.history_frames,
             varThreshold=p.mog2_var_threshold,
             detectShadows=p.detect_shadows,
         )
+        self._mog2.setShadowValue(self._shadow_value)
 
     def apply(self, gray: np.ndarray, learning_rate: float | None = None) -> Regions:
         """Segment one uint8 (H, W) frame and update the background model.
@@ -192,57 +275,79 @@ class Segmenter:
                 else type(gray).__name__
             )
             raise ValueError(f"Segmenter.apply needs a grayscale uint8 (H, W) frame, got {got}")
-        p = self.params
-        equalised = self._clahe.apply(gray)
+        if gray.shape != self._frame_shape:
+            if self.crop is not None:
+                raise ValueError(
+                    f"Segmenter.apply: this segmenter's crop is of {self._frame_shape} frames, "
+                    f"got a frame of shape {gray.shape}"
+                )
+            self._use_crop(full_frame(*gray.shape, self.params.clahe_tile_px))
+        p, fg = self.params, self._fg
+        self._clahe.apply(gray[self._clahe_part], dst=self._equalised)
         rate = p.learning_rate if learning_rate is None else learning_rate
-        fg = self._mog2.apply(equalised, learningRate=rate)
-        # shadows are written as 127; the cut turns them (and nothing brighter) into background
-        cv2.threshold(fg, p.shadow_cut, 255, cv2.THRESH_BINARY, dst=fg)
-        cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._kernel, dst=fg)
-        frame_px = gray.shape[0] * gray.shape[1]
-        foreground_fraction = cv2.countNonZero(fg) / frame_px
+        self._mog2.apply(self._equalised_crop, fgmask=fg, learningRate=rate)
+        if not cv2.countNonZero(fg):  # nothing moved: no morphology or contours to run
+            return Regions(_NO_BOXES, _NO_AREAS, [], _NO_FLAGS, 0.0, self._mask, _NO_FLAGS)
+        cv2.erode(fg, self._kernel, dst=fg)
+        cv2.dilate(fg, self._kernel, dst=fg)
+        foreground_fraction = cv2.countNonZero(fg) / self._crop_px
         if p.dilate_iterations > 0:
             cv2.dilate(fg, self._kernel, dst=fg, iterations=p.dilate_iterations)
-        contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        height_px, width_px = gray.shape
-        min_area_px = p.min_area_fraction * frame_px
-        if len(contours) > _FEW_CONTOURS:
-            idx, boxes, areas = _large_enough(contours, min_area_px)
-            dense = areas >= p.min_extent * (boxes[:, 2].astype(np.float64) * boxes[:, 3])
-            idx, boxes, areas = idx[dense], boxes[dense], areas[dense]
-            touches = np.any(
-                (boxes[:, :2] <= 0) | (boxes[:, :2] + boxes[:, 2:] >= (width_px, height_px)),
-                axis=1,
-            )
-            kept = [contours[i] for i in idx]
-        else:
-            # few contours: plain Python over OpenCV's per-contour calls, areas first and
-            # boxes only for the survivors (most are specks); numpy only for the results
-            kept, box_rows, area_rows, touch_rows = [], [], [], []
-            for contour in contours:
-                area = cv2.contourArea(contour)
-                if area < min_area_px:
-                    continue
-                x, y, w, h = cv2.boundingRect(contour)
-                if area < p.min_extent * (w * h):
-                    continue
-                kept.append(contour)
-                box_rows.append((x, y, w, h))
-                area_rows.append(area)
-                touch_rows.append(x <= 0 or y <= 0 or x + w >= width_px or y + h >= height_px)
-            if not kept:  # the usual frame: nothing moved (zero-size arrays cannot be mutated)
-                return Regions(_NO_BOXES, _NO_AREAS, kept, _NO_FLAGS, foreground_fraction, fg)
-            boxes = np.array(box_rows, np.int32).reshape(-1, 4)
-            areas = np.array(area_rows, np.float64)
-            touches = np.array(touch_rows, bool)
-        return Regions(
-            boxes_px=boxes,
-            areas_px=areas,
-            contours=kept,
-            touches_border=touches,
-            foreground_fraction=foreground_fraction,
-            mask=fg,
+        contours, _ = cv2.findContours(
+            fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE, offset=self._lo
         )
+        if len(contours) > _FEW_CONTOURS:
+            kept, boxes, areas = self._filter_many(contours)
+            touches, cut = self._edges(boxes)
+            return Regions(boxes, areas, kept, touches, foreground_fraction, self._mask, cut)
+        return self._filter_few(contours, foreground_fraction)
+
+    def _filter_few(self, contours, foreground_fraction: float) -> Regions:
+        """The regions of a frame's few contours: plain Python over OpenCV's per-contour calls,
+        areas first and boxes only for the survivors (most are specks); numpy only for the results."""
+        min_area_px, min_extent = self._min_area_px, self.params.min_extent
+        (left, top), (right, bottom) = self._lo, self._hi
+        kept, box_rows, area_rows, edge_rows = [], [], [], []
+        for contour in contours:
+            area = cv2.contourArea(contour)
+            if area < min_area_px:
+                continue
+            x, y, w, h = cv2.boundingRect(contour)
+            if area < min_extent * (w * h):
+                continue
+            kept.append(contour)
+            box_rows.append((x, y, w, h))
+            area_rows.append(area)
+            edge_rows.append(x <= left or y <= top or x + w >= right or y + h >= bottom)
+        if not kept:  # the usual frame: nothing moved (zero-size arrays cannot be mutated)
+            return Regions(
+                _NO_BOXES, _NO_AREAS, kept, _NO_FLAGS, foreground_fraction, self._mask, _NO_FLAGS
+            )
+        boxes = np.array(box_rows, np.int32).reshape(-1, 4)
+        if any(edge_rows) and self._cropped:
+            touches, cut = self._edges(boxes)
+        else:
+            touches, cut = np.array(edge_rows, bool), np.zeros(len(kept), bool)
+        return Regions(
+            boxes, np.array(area_rows, np.float64), kept, touches, foreground_fraction, self._mask, cut
+        )
+
+    def _filter_many(self, contours) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+        """Contours passing the size and extent limits, their boxes and areas, vectorised over all
+        vertices for the many specks of a noisy frame."""
+        idx, boxes, areas = _large_enough(contours, self._min_area_px)
+        dense = areas >= self.params.min_extent * (boxes[:, 2].astype(np.float64) * boxes[:, 3])
+        idx, boxes, areas = idx[dense], boxes[dense], areas[dense]
+        return [contours[i] for i in idx], boxes, areas
+
+    def _edges(self, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(touches the frame's border, touches a crop edge that is not the frame's), (N,) each."""
+        low = boxes[:, :2] <= self._lo
+        high = boxes[:, :2] + boxes[:, 2:] >= self._hi
+        frame_low = low & self._lo_is_frame
+        frame_high = high & self._hi_is_frame
+        touches = np.any(frame_low | frame_high, axis=1)
+        return touches, np.any((low & ~frame_low) | (high & ~frame_high), axis=1)
 
 
 def _large_enough(contours, min_area_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

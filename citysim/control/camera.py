@@ -47,7 +47,8 @@ class ForegroundThreshold(Controller):
         super().__init__(ctx)
         if ctx.spec.threshold_fraction is not None:
             self.fraction = ctx.spec.threshold_fraction
-        self.segmenters = [Segmenter(SegmenterParams()) for _ in ctx.lamps]
+        # the whole frame, as the paper's baseline; the background forgets at the camera's own rate
+        self.segmenters = [Segmenter(SegmenterParams(), fps=1.0 / ctx.frame_period_s) for _ in ctx.lamps]
         self.light = LightChangeWatch(ctx)
         self.last_counts = [0] * len(ctx.lamps)
         self.clock = BackgroundClock(len(ctx.lamps), 1.0 / ctx.frame_period_s)

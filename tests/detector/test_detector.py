@@ -121,18 +121,22 @@ def test_border_regions_and_far_regions_are_not_returned(model):
     assert len(distances[25.0]) >= 6 and all(abs(d - 22.0) < 2.2 for d in distances[25.0])
 
 
-def test_regions_without_a_ground_point_are_not_returned(model):
+@pytest.mark.parametrize("crop_to_range", [False, True])
+def test_regions_without_a_ground_point_are_not_returned(model, crop_to_range):
     # tilt 5 deg puts the horizon at row ~90; a bright thing moving above it has no distance
     cam = scene_b(tilt_deg=5.0)
     assert 60 < cam.horizon_row_px < 120
     clip = Clip(cam, seed=4)
-    det = Detector(cam, model=model)
+    det = Detector(cam, model=model, crop_to_range=crop_to_range)
     clip.warm_up(det, n=40)
     for k in range(4):
         img = clip.frame()
         img[20:60, 60 + 10 * k : 90 + 10 * k] = 200
         detections = det.process(img)
-    assert len(det.last_regions) == 1 and not det.last_regions.touches_border[0]
+    if crop_to_range:  # above the band where a target within range can be: not even segmented
+        assert det.crop.top_px > 60 and len(det.last_regions) == 0
+    else:
+        assert len(det.last_regions) == 1 and not det.last_regions.touches_border[0]
     assert detections == []
 
 

@@ -362,4 +362,5 @@ def test_explicit_automatic_learning_rate_is_mog2s_own():
         a = own.apply(frame).mask
         b = explicit.apply(frame, explicit.automatic_learning_rate(k)).mask
         assert np.array_equal(a, b), k
-    assert explicit.automatic_learning_rate(1000) == 1.0 / explicit.params.mog2_history
+    assert explicit.history_frames == 500  # 500 frames at the default 15 frames/s
+    assert explicit.automatic_learning_rate(1000) == 1.0 / explicit.history_frames
