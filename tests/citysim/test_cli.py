@@ -2,10 +2,8 @@
 
 import csv
 import json
-import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import cv2
@@ -15,6 +13,7 @@ import yaml
 
 from citysim.cli import main
 from tests.citysim.streets import two_way_street
+from tests.folders import unwritable_folder
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -171,20 +170,6 @@ def test_bad_numbers_are_one_line_before_any_simulation(tmp_path, capsys, no_sim
     for needle in needles:
         assert needle in err, err
     assert tree(tmp_path) == before  # no output, no hidden .partial folder
-
-
-def unwritable_folder(tmp_path: Path) -> Path:
-    """A folder this process cannot write in: permission bits, or for root a read-only system folder."""
-    if os.geteuid() != 0:
-        locked = tmp_path / "locked"
-        locked.mkdir(mode=0o500)
-        return locked
-    for candidate in (Path("/sys"), Path("/proc")):
-        try:
-            Path(tempfile.mkdtemp(dir=candidate)).rmdir()
-        except OSError:
-            return candidate
-    pytest.skip("no folder this root process cannot write in")
 
 
 def folder_with(path: Path, *names: str) -> Path:

@@ -3,10 +3,8 @@
 import csv
 import json
 import math
-import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import cv2
@@ -17,6 +15,7 @@ import yaml
 from detector.__main__ import CSV_HEADER, main
 from detector.camera import CameraModel
 from detector.train.shapes import pedestrian_shape, silhouette_mask
+from tests.folders import unwritable_folder
 
 SCENE_B = dict(height_m=3.1, tilt_deg=22.0, focal_mm=0.73, sensor_w_mm=0.7, sensor_h_mm=0.52, width_px=320,
                height_px=240, fps=15.0)
@@ -288,20 +287,6 @@ def test_train_seed_must_be_whole_and_not_negative(tmp_path, capsys):
     code, err = run_main(capsys, ["train", "--out", str(tmp_path), "--seed", "0"])
     assert_one_line_error(code, err, "--out", "is a folder")
     assert list(tmp_path.iterdir()) == []
-
-
-def unwritable_folder(tmp_path: Path) -> Path:
-    """A folder this process cannot write in: permission bits, or for root a read-only system folder."""
-    if os.geteuid() != 0:
-        locked = tmp_path / "locked"
-        locked.mkdir(mode=0o500)
-        return locked
-    for candidate in (Path("/sys"), Path("/proc")):
-        try:
-            Path(tempfile.mkdtemp(dir=candidate)).rmdir()
-        except OSError:
-            return candidate
-    pytest.skip("no folder this root process cannot write in")
 
 
 def bad_out(kind: str, tmp_path: Path) -> Path:
