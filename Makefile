@@ -19,8 +19,9 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(VENV)/bin/citysim run scenarios/suburban_night.yaml --out results/demo --duration 600
 
+# one worker per core; a test file stays on one worker, so its module fixtures run once
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --dist loadfile
 
 # Figures, not pass/fail: detector vs OpenCV's floor, renderer, simulation speed, sweep scaling.
 bench: $(STAMP)
