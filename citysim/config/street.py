@@ -174,6 +174,11 @@ class LampCameraSpec(Spec):
 
     file: str | None = None
     heading_deg: float = Field(default=0.0, ge=-360, le=360)
+    headings_deg: tuple[float, ...] | None = Field(
+        default=None,
+        description="one heading per lamp (deg CCW from +x), overriding heading_deg: e.g. the "
+        "first camera looking back at the street's approach",
+    )
     height_m: float | None = Field(default=None, gt=0, le=30)
     tilt_deg: float | None = None
     focal_mm: float | None = None
@@ -266,8 +271,21 @@ class LampsSpec(Spec):
             raise FieldPathError(
                 (missing,), "give either x_m (explicit positions) or both count and spacing_m"
             )
+        headings = self.camera.headings_deg
+        if headings is not None:
+            n = len(self.positions_x_m)
+            if len(headings) != n:
+                raise FieldPathError(("camera", "headings_deg"), f"one heading per lamp: {n} lamps, got {len(headings)}")
+            for i, h in enumerate(headings):
+                if not -360 <= h <= 360:
+                    raise FieldPathError(("camera", "headings_deg", i), f"must be in -360..360 deg, got {h:g}")
         self._camera_model = self._build_camera()
         return self
+
+    def heading_of(self, lamp_index: int) -> float:
+        """Lamp ``lamp_index``'s camera heading, deg CCW from +x."""
+        headings = self.camera.headings_deg
+        return self.camera.heading_deg if headings is None else headings[lamp_index]
 
     def _build_camera(self) -> CameraModel:
         spec = self.camera

@@ -134,7 +134,8 @@ def build_street(scenario: Scenario, rng: np.random.Generator | None = None) -> 
             x_m=x,
             y_m=lamps.y_m,
             pole_height_m=lamps.pole_height_m,
-            camera=base.placed(x_m=x, y_m=lamps.y_m),
+            camera=base.placed(x_m=x, y_m=lamps.y_m) if lamps.camera.headings_deg is None
+            else base.placed(x_m=x, y_m=lamps.y_m, yaw_deg=lamps.heading_of(i)),
             zone_start_m=z0,
             zone_end_m=z1,
         )
