@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from sklearn.linear_model import LogisticRegression
 
-from detector.camera import CameraModel
 from detector.classes import CLASSES
 from detector.confirm import Tracker
 from detector.detector import Detection, Detector
@@ -21,11 +20,10 @@ from detector.train.shapes import (
     cyclist_shape,
     ground_spot_shape,
     pedestrian_shape,
-    silhouette_mask,
 )
 from tests.detector.cameras import scene_b
+from tests.detector.clips import Clip
 
-H_PX, W_PX = 240, 320
 FPS = 15.0
 WALK_MPS = 1.4
 
@@ -33,32 +31,6 @@ WALK_MPS = 1.4
 @pytest.fixture(scope="module")
 def model():
     return default_model()
-
-
-class Clip:
-    """A static IR-like background (brighter near the emitter, at the bottom) plus bright walkers."""
-
-    def __init__(self, camera: CameraModel, seed: int = 0) -> None:
-        self.camera = camera
-        self.rng = np.random.default_rng(seed)
-        rows = np.linspace(0.0, 1.0, H_PX)[:, None]
-        self.background = 25.0 + 30.0 * rows + self.rng.normal(0, 2, (H_PX, W_PX))
-
-    def frame(self, shapes=(), level_dn: float = 150.0) -> np.ndarray:
-        img = self.background + self.rng.normal(0, 3.0, (H_PX, W_PX))
-        for shape in shapes:
-            sil = silhouette_mask(self.camera, shape)
-            if sil is None:
-                continue
-            x0, y0 = sil.offset_px
-            h, w = sil.mask.shape
-            roi = img[y0 : y0 + h, x0 : x0 + w]
-            roi[sil.mask > 0] = level_dn + self.rng.normal(0, 3.0, int(np.count_nonzero(sil.mask)))
-        return np.clip(img, 0, 255).astype(np.uint8)
-
-    def warm_up(self, detector: Detector, n: int = 120) -> None:
-        for _ in range(n):
-            assert detector.process(self.frame()) == []
 
 
 def walker(forward_m: float, lateral_m: float, t_s: float, heading_rad: float = math.pi / 2):

@@ -28,8 +28,8 @@ from detector.train.shapes import (
     pedestrian_shape,
     vehicle_shape,
 )
-from detector.train.silhouette import silhouette_mask
 from tests.detector.cameras import scene_b
+from tests.detector.clips import Clip
 
 RANGE_M = 25.0
 SCENE_A = CameraModel(
@@ -182,28 +182,6 @@ def test_crop_is_the_full_frame_when_the_range_covers_it():
 
 
 # ---------------------------------------------------------- crop vs full frame
-class Clip:
-    """A static IR-like background (brighter toward the bottom) plus bright 3D shapes."""
-
-    def __init__(self, camera: CameraModel, seed: int = 0) -> None:
-        self.camera = camera
-        self.rng = np.random.default_rng(seed)
-        h, w = camera.height_px, camera.width_px
-        self.background = 25.0 + 30.0 * np.linspace(0.0, 1.0, h)[:, None] + self.rng.normal(0, 2, (h, w))
-
-    def frame(self, shapes=(), level_dn: float = 150.0) -> np.ndarray:
-        img = self.background + self.rng.normal(0, 3.0, self.background.shape)
-        for shape in shapes:
-            sil = silhouette_mask(self.camera, shape)
-            if sil is None:
-                continue
-            x0, y0 = sil.offset_px
-            h, w = sil.mask.shape
-            roi = img[y0 : y0 + h, x0 : x0 + w]
-            roi[sil.mask > 0] = level_dn + self.rng.normal(0, 3.0, int(np.count_nonzero(sil.mask)))
-        return np.clip(img, 0, 255).astype(np.uint8)
-
-
 def targets(camera: CameraModel, t_s: float) -> list:
     """Table 1's targets, the largest at the range's end, each in its own columns and walking or
     riding along the camera's heading; every one's nearest ground point within 25 m."""
