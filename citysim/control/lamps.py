@@ -30,7 +30,10 @@ forward (``advance``/``set_target`` with an earlier time raise ``ValueError``).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from numbers import Real
+
+import numpy as np
 
 from citysim.config.street import LuminaireSpec
 
@@ -237,3 +240,8 @@ class Lamp:
             f"Lamp(index={self.index}, t_s={self._clock_t_s}, target={self._target}, "
             f"energy_j={self.energy_j:.3f}, switches={self.switches})"
         )
+
+
+def levels_at(lamps: Sequence[Lamp], t_s: float) -> np.ndarray:
+    """Every lamp's visible-light level (0..1) at ``t_s``, in lamp order."""
+    return np.array([lamp.level_at(t_s) for lamp in lamps])

@@ -21,11 +21,9 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
-import numpy as np
-
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.base import ControlContext, Controller
-from citysim.control.lamps import Lamp
+from citysim.control.lamps import Lamp, levels_at
 from citysim.control.network import Network
 from citysim.control.registry import CONTROLLERS
 from citysim.metrics.collector import Collector
@@ -129,7 +127,7 @@ def run_controller(
     ]
 
     def after_step(t_s: float, agents) -> None:
-        levels = _levels_at(lamps, t_s)
+        levels = levels_at(lamps, t_s)
         for collector in collectors:
             collector.on_step(t_s, agents, levels)
         controller.on_physics_step(t_s, agents)
@@ -148,10 +146,6 @@ def run_controller(
         figures.update(collector.finish(t_end))
     figures.update(_controller_figures(controller, night))
     return {key: figures[key] for key in SUMMARY_KEYS}
-
-
-def _levels_at(lamps: Sequence[Lamp], t_s: float) -> np.ndarray:
-    return np.array([lamp.level_at(t_s) for lamp in lamps])
 
 
 def _controller_figures(controller: Controller, night: Night) -> dict[str, Any]:
