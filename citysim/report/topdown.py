@@ -6,6 +6,10 @@ footprint is the ground its image border back-projects to (through its lens
 distortion), cut at ``FOOTPRINT_RANGE_M`` of forward distance - rays above the
 horizon are cut there as well.
 
+With ``coverage`` (``citysim.world.coverage.coverage_grid``) the picture also shows where a
+lamp camera sees a person whole within the detector's range (green cells) and where it does not
+(red cells), with the blind stretches along the street as red bars on the top edge.
+
 Conventions: world frame of DESIGN.md (x along the street, y across it, m);
 tracks are ``{object_id: (T, 2) array of (x_m, y_m)}``.
 """
@@ -21,6 +25,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Polygon, Rectangle
 
+from citysim.world.coverage import CoverageGrid, blind_stretches_m
 from citysim.world.street import Street
 from detector.camera import CameraModel
 
@@ -80,6 +85,7 @@ def plot_topdown(
     cameras: Sequence[CameraModel],
     tracks: Mapping[int, np.ndarray] | None,
     path: str | Path,
+    coverage: CoverageGrid | None = None,
 ) -> Path:
     """Draw the street from above and write it to ``path`` (PNG); returns the path."""
     path = Path(path)
@@ -95,6 +101,8 @@ def plot_topdown(
     _draw_sidewalks(ax, street)
     _draw_lanes(ax, street)
     _draw_scenery(ax, street)
+    if coverage is not None:
+        _draw_coverage(ax, coverage, y_hi)
     _draw_cameras(ax, cameras)
     _draw_lamps(ax, street, y_lo)
     if tracks:
@@ -105,9 +113,10 @@ def plot_topdown(
     ax.set_aspect("equal")
     ax.set_xlabel("x along the street (m)")
     ax.set_ylabel("y across (m)")
-    ax.set_title(
-        f"Street {street.length_m:.0f} m, {len(street.lamps)} lamps, {len(cameras)} cameras"
-    )
+    title = f"Street {street.length_m:.0f} m, {len(street.lamps)} lamps, {len(cameras)} cameras"
+    if coverage is not None:
+        title += f"; {100 * coverage.seen.mean():.0f} % of lanes and sidewalks seen (green), blind in red"
+    ax.set_title(title)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, format="png")
@@ -174,6 +183,18 @@ def _draw_scenery(ax: Axes, street: Street) -> None:
                     zorder=3,
                 )
             )
+
+
+def _draw_coverage(ax: Axes, grid: CoverageGrid, y_hi: float) -> None:
+    """Seen cells green, unseen cells red; blind stretches of the street as red bars on the top edge."""
+    half = grid.step_m / 2
+    for seen, colour in ((True, "#2e7d32"), (False, "#c62828")):
+        ix, iy = np.nonzero(grid.seen == seen)
+        for x, y in zip(grid.xs_m[ix], grid.ys_m[iy], strict=True):
+            ax.add_patch(Rectangle((x - half, y - half), grid.step_m, grid.step_m, color=colour,
+                                   alpha=0.30, lw=0, zorder=4))  # fmt: skip
+    for a_m, b_m in blind_stretches_m(grid):
+        ax.plot([a_m, b_m], [y_hi - 1.0, y_hi - 1.0], lw=5, color="#c62828", solid_capstyle="butt", zorder=9)
 
 
 def _draw_cameras(ax: Axes, cameras: Sequence[CameraModel]) -> None:

@@ -73,25 +73,48 @@ def seen_grid(street: Street, xs_m: np.ndarray, ys_m: np.ndarray, range_m: float
     return seen.reshape(gx.shape)
 
 
-def camera_coverage(street: Street, range_m: float = 25.0, step_m: float = 0.5) -> Coverage:
-    """The coverage of ``street``'s lamp cameras for a detector that reports up to ``range_m``."""
+@dataclass(frozen=True)
+class CoverageGrid:
+    """The sampled walkable and drivable area of the lamp zones: cell centres (m) and which are seen."""
+
+    xs_m: np.ndarray
+    ys_m: np.ndarray
+    seen: np.ndarray  # bool (len(xs_m), len(ys_m))
+    step_m: float
+    end_m: float  # where the last lamp zone ends
+
+
+def coverage_grid(street: Street, range_m: float = 25.0, step_m: float = 0.5) -> CoverageGrid:
+    """The lanes and sidewalks of the lamp zones on a ``step_m`` grid, each cell seen or not."""
     start_m = min(s.zone_start_m for s in street.lamps)
     end_m = max(s.zone_end_m for s in street.lamps)
     xs_m = np.arange(start_m + step_m / 2, end_m, step_m)
     ys_m = np.concatenate([np.arange(lo + step_m / 2, hi, step_m) for lo, hi in _bands(street)])
-    seen = seen_grid(street, xs_m, ys_m, range_m)
+    return CoverageGrid(xs_m, ys_m, seen_grid(street, xs_m, ys_m, range_m), step_m, end_m)
+
+
+def camera_coverage(street: Street, range_m: float = 25.0, step_m: float = 0.5) -> Coverage:
+    """The coverage of ``street``'s lamp cameras for a detector that reports up to ``range_m``."""
+    grid = coverage_grid(street, range_m, step_m)
+    xs_m, seen = grid.xs_m, grid.seen
     zone_seen = tuple(
         float(seen[(xs_m >= s.zone_start_m) & (xs_m < s.zone_end_m)].mean()) for s in street.lamps
     )
-    blind_x = ~seen.any(axis=1)
+    return Coverage(zone_seen, blind_stretches_m(grid))
+
+
+def blind_stretches_m(grid: CoverageGrid) -> tuple[tuple[float, float], ...]:
+    """The x intervals (m) where no cell across the lanes and sidewalks is seen."""
+    half = grid.step_m / 2
+    blind_x = ~grid.seen.any(axis=1)
     stretches = []
     run_start = None
-    for x, blind in zip(xs_m, blind_x, strict=True):
+    for x, blind in zip(grid.xs_m, blind_x, strict=True):
         if blind and run_start is None:
-            run_start = x - step_m / 2
+            run_start = x - half
         elif not blind and run_start is not None:
-            stretches.append((float(run_start), float(x - step_m / 2)))
+            stretches.append((float(run_start), float(x - half)))
             run_start = None
     if run_start is not None:
-        stretches.append((float(run_start), float(end_m)))
-    return Coverage(zone_seen, tuple(stretches))
+        stretches.append((float(run_start), float(grid.end_m)))
+    return tuple(stretches)

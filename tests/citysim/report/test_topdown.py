@@ -70,3 +70,29 @@ def test_steep_camera_footprint_is_closed_without_the_range_cut() -> None:
     cam = CAMERA.placed(tilt_deg=70.0)
     fwd = cam.forward_and_lateral_m(camera_footprint_m(cam))[:, 0]
     assert fwd.max() < 10.0  # looking almost straight down: no ray reaches the horizon
+
+
+def _red_px(path) -> int:
+    """Pixels of the plot's 'unseen' red (RGB (198, 40, 40), alone or blended over the street):
+    red above green and blue, green and blue alike (which tells it from the zone bars' orange)."""
+    bgr = cv2.imread(str(path)).astype(int)
+    b, g, r = bgr[..., 0], bgr[..., 1], bgr[..., 2]
+    return int(((r - g > 30) & (abs(g - b) < 20)).sum())
+
+
+def test_coverage_is_drawn_seen_green_and_blind_red(tmp_path) -> None:
+    from citysim.world.coverage import CoverageGrid, blind_stretches_m, coverage_grid
+
+    st = street()
+    real = coverage_grid(st)
+    assert 0.0 < real.seen.mean() < 1.0  # this street has both: the test below can tell them apart
+    cams = [lamp.camera for lamp in st.lamps]
+    all_seen = CoverageGrid(real.xs_m, real.ys_m, np.ones_like(real.seen), real.step_m, real.end_m)
+    none_seen = CoverageGrid(real.xs_m, real.ys_m, np.zeros_like(real.seen), real.step_m, real.end_m)
+    assert blind_stretches_m(all_seen) == ()
+    assert blind_stretches_m(none_seen) == ((real.xs_m[0] - real.step_m / 2, real.end_m),)
+    red = {name: _red_px(plot_topdown(st, cams, None, tmp_path / f"{name}.png", coverage=grid))
+           for name, grid in (("all", all_seen), ("real", real), ("none", none_seen))}  # fmt: skip
+    # the plot without blind cells has (next to) none of that red; more blind cells, more red
+    assert red["all"] < 0.05 * red["none"]
+    assert red["all"] < red["real"] < red["none"]
