@@ -59,8 +59,13 @@ def cmd_run(args) -> int:
                              scenario_file=str(args.scenario))
     from citysim.report.run_plots import plot_run
     from citysim.report.table import comparison_table
+    from citysim.report.topdown import plot_coverage_map
+    from citysim.world.street import build_street
 
-    plot_run(args.out)  # the run folder's data is written; its pictures are drawn here, outside the simulation
+    # the run folder's data is written; its pictures are drawn here, outside the simulation (the
+    # coverage map from the scenario's street, the rest from the run folder alone)
+    plot_coverage_map(build_street(scenario), Path(args.out) / "plots" / "coverage.png")
+    plot_run(args.out)
     print(comparison_table(summary))
     print("\n" + "\n".join(run_outputs(Path(args.out))))
     return 0

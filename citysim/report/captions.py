@@ -46,6 +46,14 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "they are the bars to the right of each panel, and each curve stops at the share that was "
         "lit.",
     ),
+    "coverage.png": (
+        "Where the cameras can see",
+        "The street from above with each camera's field of view (yellow). A green cell of a lane "
+        "or sidewalk is ground where some lamp camera sees a person whole within the detector's "
+        "range; a red cell is ground no camera sees, and the red bars along the top are stretches "
+        "of street where no camera sees anything across the whole width. People crossing red "
+        "ground are found late or not at all by a camera controller, whatever its settings.",
+    ),
     "energy_per_hour_sweep": (
         "Energy per hour of the night (sweep)",
         "Mean energy drawn in each clock hour over every finished point of the sweep, one bar per "

@@ -53,8 +53,10 @@ from citysim.report.runfacts import RunFacts, load_summary, read_passages, run_f
 
 __all__ = ["RUN_PLOTS", "PlotError", "load_summary", "plot_run", "read_passages"]
 
-#: File names of the run plots, in the order the report shows them.
-RUN_PLOTS = ("frontier.png", "energy.png", "energy_per_hour.png", "lamp_levels.png", "lag_cdf.png")
+#: The plots drawn from the run folder's traffic data (each says how many objects it rests on).
+TRAFFIC_PLOTS = ("frontier.png", "energy.png", "energy_per_hour.png", "lamp_levels.png", "lag_cdf.png")
+#: Every plot of a run, in the order the report shows them: the traffic plots and the camera coverage map (drawn from the scenario).
+RUN_PLOTS = (*TRAFFIC_PLOTS, "coverage.png")
 #: Lamps shown in lamp_levels.png, and the longest stretch of time shown (s).
 LEVEL_PLOT_LAMPS = 3
 LEVEL_PLOT_WINDOW_S = 600.0
@@ -89,6 +91,8 @@ def plot_run(run_dir: str | Path) -> list[Path]:
     lag = plot_lag_cdf(passages, controllers, plot_dir / "lag_cdf.png",
                        f"{summary.get('scenario', '')}: ", notes)  # fmt: skip
     paths += [lag] if lag else []
+    coverage = plot_dir / "coverage.png"  # drawn by `citysim run` from the scenario's street, kept
+    paths += [coverage] if coverage.exists() else []
     write_notes(plot_dir, notes)
     return paths
 

@@ -123,6 +123,14 @@ def plot_topdown(
     return path
 
 
+def plot_coverage_map(street: Street, path: str | Path) -> Path:
+    """The street's camera coverage from above (``coverage.png`` of a run): fields of view, seen and
+    blind ground."""
+    from citysim.world.coverage import coverage_grid
+
+    return plot_topdown(street, [site.camera for site in street.lamps], None, path, coverage=coverage_grid(street))
+
+
 def _draw_sidewalks(ax: Axes, street: Street) -> None:
     for sw in street.sidewalks:
         ax.add_patch(

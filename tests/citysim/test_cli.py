@@ -223,6 +223,7 @@ def test_an_earlier_folder_of_the_same_kind_is_accepted(tmp_path, capsys, monkey
         "dark_exposure_s": 0.0, "unlit_crossings": 0, "switches": 0, "false_on_time_s": 0.0}}}
     monkeypatch.setattr("citysim.sim.compare.run_comparison", lambda *a, **k: calls.append(k["out_dir"]) or summary)
     monkeypatch.setattr("citysim.report.run_plots.plot_run", lambda folder: [])
+    monkeypatch.setattr("citysim.report.topdown.plot_coverage_map", lambda street, path: path)
     run = folder_with(tmp_path / "run", "summary.json", "objects.csv", "lamps.csv", "plots/", "report.html")
     assert main(["run", str(tiny(tmp_path)), "--out", str(run), "--no-progress"]) == 0
     counts = {"points": 4, "ran": 2, "ok": 2, "failed": 0, "skipped": 2, "results": tmp_path / "sw" / "results.csv"}

@@ -14,7 +14,9 @@ import yaml
 
 from citysim.config.scenario import load_scenario
 from citysim.report.run_plots import plot_run
+from citysim.report.topdown import plot_coverage_map
 from citysim.sim.compare import run_comparison
+from citysim.world.street import build_street
 from tests.citysim.streets import two_way_street
 
 REPO = Path(__file__).resolve().parents[3]
@@ -55,8 +57,11 @@ def run_dir(tmp_path_factory, scenario_file) -> Path:
     """The run folder (summary.json, objects.csv, lamps.csv, plots/) of SCENARIO; not to be
     written to (tests that write take ``run_copy``)."""
     out = tmp_path_factory.mktemp("run") / "run"
-    run_comparison(load_scenario(scenario_file), out_dir=out, scenario_file=str(scenario_file))
-    plot_run(out)  # as `citysim run` does after the simulation
+    scenario = load_scenario(scenario_file)
+    run_comparison(scenario, out_dir=out, scenario_file=str(scenario_file))
+    # as `citysim run` does after the simulation
+    plot_coverage_map(build_street(scenario), out / "plots" / "coverage.png")
+    plot_run(out)
     return out
 
 

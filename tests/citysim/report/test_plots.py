@@ -68,6 +68,7 @@ def test_plot_run_draws_energy_levels_and_lag(run_copy):
         "energy_per_hour.png",
         "lamp_levels.png",
         "lag_cdf.png",
+        "coverage.png",  # drawn by `citysim run` (here the fixture) from the scenario, and kept
     ]
     for p in paths:
         assert p.parent == run_dir / "plots"
@@ -94,7 +95,7 @@ def test_run_report_embeds_every_plot(run_copy):
     html = report.read_text()
     uris = re.findall(r'<img alt="([^"]+)" src="data:image/png;base64,([^"]+)"', html)
     on_disk = sorted(p.name for p in (run_dir / "plots").glob("*.png"))
-    assert sorted(n for n, _ in uris) == on_disk and len(on_disk) == 5
+    assert sorted(n for n, _ in uris) == on_disk and len(on_disk) == 6
     for name, data in uris:
         decoded = cv2.imdecode(np.frombuffer(base64.b64decode(data), np.uint8), cv2.IMREAD_COLOR)
         assert decoded is not None

@@ -32,7 +32,7 @@ from citysim.report.common import (
 )
 from citysim.report.html import write_report
 from citysim.report.lag_cdf import draw_lag_cdf, lag_groups
-from citysim.report.run_plots import RUN_PLOTS, draw_lamp_levels, level_data, plot_run
+from citysim.report.run_plots import RUN_PLOTS, TRAFFIC_PLOTS, draw_lamp_levels, level_data, plot_run
 from citysim.report.runfacts import (
     RunFacts,
     load_summary,
@@ -176,7 +176,7 @@ def test_few_objects_warning_on_the_plots(run_copy, monkeypatch):
     monkeypatch.setattr(run_plots, "save", keep)
     monkeypatch.setattr(lag_cdf, "save", keep)
     plot_run(run_copy)
-    assert {name for name, _ in drawn} == set(RUN_PLOTS)
+    assert {name for name, _ in drawn} == set(TRAFFIC_PLOTS)
     for name, texts in drawn:
         assert any(t.startswith("Few objects: only") for t in texts), name
     fig = plt.figure()
@@ -341,6 +341,6 @@ def test_every_legend_gives_the_number_of_objects(run_copy, monkeypatch):
     monkeypatch.setattr(run_plots, "save", keep)
     monkeypatch.setattr(lag_cdf, "save", keep)
     plot_run(run_copy)
-    assert {name for name, _ in legends} == set(RUN_PLOTS)
+    assert {name for name, _ in legends} == set(TRAFFIC_PLOTS)
     for name, text in legends:
         assert re.search(r"n=\d+", text), (name, text)
