@@ -209,10 +209,7 @@ class StaticScene:
         self._depth: np.ndarray | None = None  # this frame's depth, when crowns sway
         self._poses: list[int] = [-1] * len(self.crowns)  # the poses drawn in the still view
         self._crown_groups = overlapping_groups([c.roi for c in self.crowns])
-        # per crown: its lit radiance per pose at the lamp levels of its key (see _crown_value)
-        self._crown_values: list[tuple[tuple[float, ...] | None, dict[int, np.ndarray]]] = [
-            (None, {}) for _ in self.crowns
-        ]
+        self._crown_values: list[tuple] = [(None, {}) for _ in self.crowns]  # see _crown_value
 
     # ------------------------------------------------------------------ build
     def _pools(self, hit: np.ndarray, pools_hit: np.ndarray, n: int) -> tuple[LampPool, ...]:
