@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: install demo test bench lint clean
+.PHONY: install demo test bench bench-night lint clean
 
 install: $(STAMP)
 
@@ -26,6 +26,10 @@ test: $(STAMP)
 # Figures, not pass/fail: detector vs OpenCV's floor, renderer, simulation speed, sweep scaling.
 bench: $(STAMP)
 	$(PY) -m experiments.bench
+
+# Every controller over the whole of suburban_night (28,800 simulated seconds) on 2 workers: long.
+bench-night: $(STAMP)
+	$(PY) -m experiments.bench --night
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check detector citysim experiments tests

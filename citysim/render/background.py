@@ -209,6 +209,7 @@ class StaticScene:
         self._depth: np.ndarray | None = None  # this frame's depth, when crowns sway
         self._poses: list[int] = [-1] * len(self.crowns)  # the poses drawn in the still view
         self._crown_groups = overlapping_groups([c.roi for c in self.crowns])
+        self._crown_values: list[tuple] = [(None, {}) for _ in self.crowns]  # see _crown_value
 
     # ------------------------------------------------------------------ build
     def _pools(self, hit: np.ndarray, pools_hit: np.ndarray, n: int) -> tuple[LampPool, ...]:
@@ -332,24 +333,41 @@ class StaticScene:
                 still[y0:y1, x0:x1] = self._lit[y0:y1, x0:x1]
             self._depth[y0:y1, x0:x1] = self.occluder_depth[y0:y1, x0:x1]
             for i in members:
-                self._composite_crown(self.crowns[i], poses[i], lamp_levels, still, self._depth)
+                self._composite_crown(i, poses[i], lamp_levels, still, self._depth)
             boxes.append((x0, y0, x1, y1))
         self._poses = poses
         return self._depth, boxes
 
+    def _crown_value(self, index: int, pose: int, lamp_levels: np.ndarray) -> np.ndarray:
+        """Crown ``index``'s radiance x alpha in ``pose`` lit by the lamps at ``lamp_levels``
+        (do not write to it). Kept per pose while the levels of the lamps lighting the crown
+        stay the same: the crowns sway through a few poses every second, and relighting one
+        costs a multiply-add per lamp reaching it."""
+        crown = self.crowns[index]
+        key = tuple(float(lamp_levels[j]) for j, _ in crown.pools)
+        cached_key, values = self._crown_values[index]
+        if key != cached_key:
+            values = {}
+            self._crown_values[index] = (key, values)
+        value = values.get(pose)
+        if value is None:
+            value = crown.base[pose]
+            for (_, pool), level in zip(crown.pools, key, strict=True):
+                if level > 0.0:
+                    value = cv2.scaleAdd(pool[pose], level, value)
+            values[pose] = value
+        return value
+
     def _composite_crown(
         self,
-        crown: CrownSprite,
+        index: int,
         pose: int,
         lamp_levels: np.ndarray,
         img: np.ndarray,
         depth: np.ndarray,
     ) -> None:
-        k = pose
-        value = crown.base[k]
-        for j, pool in crown.pools:
-            if lamp_levels[j] > 0.0:
-                value = cv2.scaleAdd(pool[k], float(lamp_levels[j]), value)
+        crown, k = self.crowns[index], pose
+        value = self._crown_value(index, k, lamp_levels)
         alpha = crown.alpha[k]
         x0, y0, x1, y1 = crown.roi
         view = img[y0:y1, x0:x1]

@@ -34,6 +34,10 @@ Z_NEAR_M = 0.05
 MAX_CANVAS_SCALE = 3.0
 
 
+#: boxes whose frame box ``Canvas.frame_boxes`` keeps (forgotten all at once beyond this)
+FRAME_BOX_MEMO_SIZE = 20_000
+
+
 @dataclass(frozen=True, eq=False)
 class Canvas:
     """One camera's drawing surface: per-pixel rays and the frame remap."""
@@ -131,10 +135,28 @@ class Canvas:
 
     def frame_boxes(self, rois: np.ndarray) -> np.ndarray:
         """(N, 4) canvas boxes (x0, y0, x1, y1), exclusive ends -> (N, 4) frame boxes that
-        hold everything of each canvas box, clipped to the frame (empty: x1 <= x0 or y1 <= y0)."""
+        hold everything of each canvas box, clipped to the frame (empty: x1 <= x0 or y1 <= y0).
+
+        Each box's answer is kept: the same boxes come back frame after frame (swaying crowns,
+        the glare of lamp heads), and an answer is a pure function of the box."""
         r = np.asarray(rois, dtype=np.int64).reshape(-1, 4)
         if self.frame_uv is None:
             return r.copy()
+        memo = self._frame_box_memo
+        keys = [tuple(row) for row in r.tolist()]
+        missing = [k for k in dict.fromkeys(keys) if k not in memo]
+        if missing:
+            if len(memo) > FRAME_BOX_MEMO_SIZE:
+                memo.clear()
+            for k, box in zip(missing, self._frame_boxes(np.array(missing, np.int64)).tolist(), strict=True):
+                memo[k] = box
+        return np.array([memo[k] for k in keys], np.int64).reshape(-1, 4)
+
+    @cached_property
+    def _frame_box_memo(self) -> dict[tuple[int, ...], list[int]]:
+        return {}
+
+    def _frame_boxes(self, r: np.ndarray) -> np.ndarray:
         # the lens maps the box's border to its image's border, a gently bent rectangle: its
         # extremes are at the corners or edge midpoints (1 px of margin covers the bending)
         cols = np.column_stack([r[:, 0], (r[:, 0] + r[:, 2]) // 2, r[:, 2] - 1])

@@ -39,13 +39,21 @@ class CameraSchedule:
         self.idle_stride = idle_stride
         self.n = len(self.cameras)
         self.watch = [list(range(max(0, i - 1), min(self.n, i + 2))) for i in range(self.n)]
+        self._poles_m = np.array([cam.position_m[:2] for cam in self.cameras]).reshape(-1, 2)
+        self._headings = np.array([cam.heading_unit for cam in self.cameras]).reshape(-1, 2)
 
     def in_view(self, agents) -> np.ndarray:
         busy = np.zeros(self.n, dtype=bool)
         if not agents:
             return busy
         pts = np.array([[a.x_m, a.y_m, 0.9] for a in agents])
-        for i, cam in enumerate(self.cameras):
+        # every camera at once, to pass over those with nobody ahead within range; the decision
+        # is the per-camera sum below (this one may differ from it in the last bits, hence the
+        # millimetre of slack)
+        ahead_m = np.einsum("cj,acj->ac", self._headings, pts[:, None, :2] - self._poles_m[None])
+        maybe = ((ahead_m > -1e-3) & (ahead_m < self.MAX_FORWARD_M + 1e-3)).any(axis=0)
+        for i in np.flatnonzero(maybe).tolist():
+            cam = self.cameras[i]
             fwd = cam.forward_and_lateral_m(pts)[:, 0]
             near = (fwd > 0.0) & (fwd < self.MAX_FORWARD_M)
             if not near.any():

@@ -2,8 +2,11 @@
 
 Each controller is an independent simulation of the same scenario and seed,
 so they can run in parallel processes (``workers``); the traffic they see is
-identical because no random stream depends on the controller. The run folder
-is staged and moved into place only when every controller finished:
+identical because no random stream depends on the controller. So the traffic is
+simulated once, by a recorder task that runs first (``citysim.sim.replay``), and
+every controller replays it instead of stepping its own pymunk world: the same
+agents bit for bit, the world's cost paid once. The run folder is staged and
+moved into place only when every controller finished:
 
     DIR/summary.json   figures per controller (see README)
     DIR/objects.csv    one row per object and lamp zone it crossed
@@ -29,6 +32,7 @@ from citysim.control.registry import CONTROLLERS
 from citysim.metrics.crossings import OBJECTS_CSV_HEADER
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.loop import check_controllers, controller_spec, run_controller
+from citysim.sim.replay import record_traffic
 from citysim.world.coverage import camera_coverage
 from citysim.world.street import build_street
 from detector.outdir import staged_output
@@ -66,30 +70,50 @@ def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
     return out
 
 
-def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None) -> dict:
-    """One controller's run writing its part of lamps.csv / objects.csv into ``part_dir``."""
+def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None,
+                 traffic: Path | None = None) -> dict:  # fmt: skip
+    """One controller's run writing its part of lamps.csv / objects.csv into ``part_dir``
+    (replaying the traffic recorded in ``traffic``, if given)."""
     part_dir.mkdir(parents=True, exist_ok=True)
     label = spec.display_name
     with open(part_dir / f"{label}.lamps.csv", "w", newline="") as lf, \
             open(part_dir / f"{label}.objects.csv", "w", newline="") as of:  # fmt: skip
         return run_controller(scenario, spec, lamps_writer=csv.writer(lf), objects_writer=csv.writer(of),
-                              on_progress=on_progress)
+                              on_progress=on_progress, traffic=traffic)
+
+
+class _Batched:
+    """Progress of a worker process, sent to the parent's queue in batches of >= 5 sim s."""
+
+    def __init__(self, progress_queue):
+        self.queue, self.pending_s = progress_queue, 0.0
+
+    def __call__(self, dt_s: float) -> None:
+        self.pending_s += dt_s
+        if self.queue is not None and self.pending_s >= 5.0:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.queue is not None and self.pending_s > 0:
+            self.queue.put(self.pending_s)
+        self.pending_s = 0.0
 
 
 def _worker(args):
-    scenario, spec, part_dir, progress_queue = args
-    last = [0.0]
-
-    def report(dt_s: float) -> None:
-        last[0] += dt_s
-        if progress_queue is not None and last[0] >= 5.0:
-            progress_queue.put(last[0])
-            last[0] = 0.0
-
-    summary = run_to_files(scenario, spec, Path(part_dir), on_progress=report)
-    if progress_queue is not None and last[0] > 0:
-        progress_queue.put(last[0])
+    scenario, spec, part_dir, progress_queue, traffic = args
+    report = _Batched(progress_queue)
+    summary = run_to_files(scenario, spec, Path(part_dir), on_progress=report,
+                           traffic=None if traffic is None else Path(traffic))  # fmt: skip
+    report.flush()
     return spec.display_name, summary
+
+
+def _record_worker(args):
+    scenario, traffic, progress_queue = args
+    report = _Batched(progress_queue)
+    record_traffic(scenario, Path(traffic), on_progress=report)
+    report.flush()
+    return None, None
 
 
 def run_comparison(
@@ -100,9 +124,13 @@ def run_comparison(
     out_dir: Path | None = None,
     workers: int = 1,
     scenario_file: str | None = None,
+    replay_traffic: bool = True,
 ) -> dict:
     """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
-    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these)."""
+    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
+
+    ``replay_traffic``: simulate the traffic once and replay it to every controller (the default);
+    False steps a world per controller (the same results, bit for bit, at a higher cost)."""
     specs = resolve_controllers(scenario, controllers)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
@@ -110,13 +138,17 @@ def run_comparison(
                "coverage": camera_coverage(build_street(scenario)).as_dict(), "controllers": {}}
     with staged_output(out_dir) if out_dir is not None else _scratch() as stage:
         parts = stage / ".parts"
-        total_s = scenario.duration_s * len(specs)
+        traffic = stage / ".traffic" if replay_traffic else None
+        total_s = scenario.duration_s * (len(specs) + (traffic is not None))
         bar = tqdm(total=total_s, unit="sim s", desc=f"{scenario.name}: {len(specs)} controllers", disable=not progress,
                    bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
         results: dict[str, dict] = {}
         if workers == 1:
+            if traffic is not None:
+                record_traffic(scenario, traffic, on_progress=bar.update)
             for spec in specs:
-                results[spec.display_name] = run_to_files(scenario, spec, parts, on_progress=bar.update)
+                results[spec.display_name] = run_to_files(scenario, spec, parts, on_progress=bar.update,
+                                                          traffic=traffic)  # fmt: skip
         else:
             with mp.Manager() as manager:
                 q = manager.Queue()
@@ -124,7 +156,10 @@ def run_comparison(
                 with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
                     # camera controllers first: the cheap ones fill the gaps at the end
                     heavy_first = sorted(specs, key=lambda s: not CONTROLLERS[s.name].uses_camera)
-                    futures = [pool.submit(_worker, (scenario, spec, str(parts), q)) for spec in heavy_first]
+                    # the recorder first: the controllers replay its chunks as it writes them
+                    futures = [] if traffic is None else [pool.submit(_record_worker, (scenario, str(traffic), q))]
+                    futures += [pool.submit(_worker, (scenario, spec, str(parts), q, traffic and str(traffic)))
+                                for spec in heavy_first]  # fmt: skip
                     pending = set(futures)
                     while pending:
                         try:
@@ -134,7 +169,8 @@ def run_comparison(
                         for f in [f for f in pending if f.done()]:
                             pending.discard(f)
                             label, result = f.result()
-                            results[label] = result
+                            if label is not None:  # None: the traffic recorder
+                                results[label] = result
                     while not q.empty():
                         bar.update(q.get())
         bar.close()
@@ -143,6 +179,8 @@ def run_comparison(
         summary["lamps"] = scenario.lamps.count or len(scenario.lamps.positions_x_m)
         _merge_parts(parts, [s.display_name for s in specs], stage)
         shutil.rmtree(parts, ignore_errors=True)
+        if traffic is not None:
+            shutil.rmtree(traffic, ignore_errors=True)
         (stage / "summary.json").write_text(json.dumps(summary, indent=2))
     return summary
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 from citysim.config.scenario import ControllerSpec, Scenario
@@ -34,6 +35,7 @@ from citysim.metrics.false_on import FalseOnTime
 from citysim.metrics.lamp_log import LampLog
 from citysim.sim.cameras import film
 from citysim.sim.night import Night, build_night
+from citysim.sim.replay import TrafficReplay
 
 #: The keys of one controller's summary, in the order summary.json lists them.
 SUMMARY_KEYS = (
@@ -111,10 +113,15 @@ def run_controller(
     lamps_writer: csv.writer | None = None,
     objects_writer: csv.writer | None = None,
     on_progress: Callable[[float], None] | None = None,
+    traffic: Path | None = None,
 ) -> dict:
-    """Simulate the scenario's night under one controller; returns its summary (summary.json entry)."""
+    """Simulate the scenario's night under one controller; returns its summary (summary.json entry).
+
+    ``traffic``: a folder of this scenario's recorded traffic (``citysim.sim.replay``) to replay
+    instead of stepping the world; the agents, and so the summary, are the same bit for bit.
+    """
     check_controllers([spec.name])
-    night = build_night(scenario)
+    night = build_night(scenario, replay=None if traffic is None else TrafficReplay(traffic))
     controller = build_controller(night, spec)
     lamps, label = controller.ctx.lamps, spec.display_name
     collectors: list[Collector] = [
@@ -154,7 +161,7 @@ def _controller_figures(controller: Controller, night: Night) -> dict[str, Any]:
         "lamp_triggers": [{"lamp": i, "triggers": int(bank.triggers[i]), "first_s": _finite(bank.first_trigger_s[i]),
                            "last_s": _finite(bank.last_trigger_s[i])} for i in range(len(controller.ctx.lamps))],
         "network": {"sent": stats.sent, "delivered": stats.delivered, "lost": stats.lost},
-        "agents_spawned": night.world.spawned_count,
+        "agents_spawned": night.spawned_count,
     }  # fmt: skip
 
 

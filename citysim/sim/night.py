@@ -9,13 +9,17 @@ builds it here, so the same seed always means the same people, cars and sensor n
 hands each step's agent snapshots to ``on_step``; ``Night.renderer(lamp)`` is that lamp
 camera's renderer, fed by its own child of the render stream (one per lamp, split once, in
 lamp order), so a camera's noise does not depend on which other cameras are rendered.
+
+``build_night(scenario, replay=...)`` is the same night with the world's agents read back from a
+recording (``citysim.sim.replay``) instead of stepped: no traffic process runs and the world is
+never stepped, but every physics step comes at the same time with the same agents.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import simpy
@@ -33,6 +37,14 @@ if TYPE_CHECKING:
 STREAMS = ("traffic", "world", "render", "control", "network")
 
 StepHook = Callable[[float, list[AgentState]], None]
+
+
+class AgentSource(Protocol):
+    """Recorded agents, step by step (``citysim.sim.replay.TrafficReplay``)."""
+
+    spawned_count: int  # agents that had entered the street by the latest step
+
+    def next_step(self) -> list[AgentState]: ...
 
 
 def seed_streams(seed: int) -> dict[str, np.random.Generator]:
@@ -53,10 +65,17 @@ class Night:
     #: the agents after the latest physics step (empty before the first)
     agents: list[AgentState] = field(default_factory=list)
     _camera_streams: list[np.random.Generator] | None = None
+    #: the recorded agents replayed instead of stepping ``world`` (None: step it)
+    replay: AgentSource | None = None
 
     @property
     def physics_dt_s(self) -> float:
         return 1.0 / self.scenario.physics_hz
+
+    @property
+    def spawned_count(self) -> int:
+        """Agents that had entered the street by the latest physics step."""
+        return self.world.spawned_count if self.replay is None else self.replay.spawned_count
 
     @property
     def n_lamps(self) -> int:
@@ -73,8 +92,11 @@ class Night:
             k += 1
             # scheduled at k * dt from the start, so steps do not drift with float sums
             yield self.env.timeout(max(0.0, k * dt_s - self.env.now))
-            self.world.step(dt_s)
-            self.agents = self.world.states()
+            if self.replay is None:
+                self.world.step(dt_s)
+                self.agents = self.world.states()
+            else:
+                self.agents = self.replay.next_step()
             if on_step is not None:
                 on_step(self.env.now, self.agents)
 
@@ -104,11 +126,13 @@ class Night:
         return [self.renderer(i) for i in (range(self.n_lamps) if lamps is None else lamps)]
 
 
-def build_night(scenario: Scenario) -> Night:
-    """The scenario's night at t = 0, traffic processes started, physics not yet."""
+def build_night(scenario: Scenario, replay: AgentSource | None = None) -> Night:
+    """The scenario's night at t = 0, traffic processes started, physics not yet; with
+    ``replay``, the recorded agents of that scenario instead of traffic and world steps."""
     streams = seed_streams(scenario.seed)
     street = build_street(scenario)
     world = World(street, streams["world"])
     env = simpy.Environment()
-    start_traffic(env, world, scenario, streams["traffic"])
-    return Night(scenario, streams, street, world, env)
+    if replay is None:
+        start_traffic(env, world, scenario, streams["traffic"])
+    return Night(scenario, streams, street, world, env, replay=replay)

@@ -8,14 +8,19 @@ measured in the same run on the same frames:
   full-frame floor (CLAHE + MOG2 + opening + contours), on sequences drawn
   through each of the paper's Table 2 cameras and the suburban lamp camera;
 * renderer: ms per frame with 0, 5 and 20 objects, beside the detector's ms/frame;
-* simulation: simulated seconds per wall second per controller, peak memory;
-* sweeps: a 16-point sweep on 2 Dask workers vs 1.
+* simulation: simulated seconds per wall second per controller replaying the recorded traffic
+  (as in a comparison), and of the traffic recorder, which runs once for all; peak memory;
+* sweeps: a 16-point sweep on 2 Dask workers vs 1;
+* whole night: every controller of suburban_night through one comparison on 2 workers, the
+  first 10 minutes scaled to the night (``--night``: the whole night, measured; long).
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
+import tempfile
 import time
 import tracemalloc
 from pathlib import Path
@@ -218,7 +223,7 @@ from citysim.config.scenario import ControllerSpec, load_scenario, override
 from citysim.sim.loop import run_controller
 scenario = override(load_scenario(sys.argv[1]), {"duration_s": float(sys.argv[3])})
 t0 = time.perf_counter()
-run_controller(scenario, ControllerSpec(name=sys.argv[2]))
+run_controller(scenario, ControllerSpec(name=sys.argv[2]), traffic=sys.argv[4])
 wall_s = time.perf_counter() - t0
 try:  # this process's own peak: ru_maxrss would also count the parent's memory at the fork
     with open("/proc/self/status") as f:
@@ -232,19 +237,31 @@ print(json.dumps({"wall_s": wall_s, "max_rss_mb": peak_mb}))
 def bench_sim(
     scenario_path: str = "scenarios/suburban_night.yaml", durations_s=(60.0, 180.0)
 ) -> dict:
-    """Simulated seconds per wall second per controller, and peak memory at two run lengths (flat = streaming)."""
+    """Simulated seconds per wall second per controller replaying the traffic (recorded once
+    here, timed), and peak memory at two run lengths (flat = streaming)."""
     import json
     import subprocess
 
+    from citysim.config.scenario import load_scenario, override
     from citysim.control.registry import CONTROLLERS
+    from citysim.sim.replay import record_traffic
 
-    print(f"== simulation: {scenario_path}, per controller (each in a fresh process) ==")
+    print(f"== simulation: {scenario_path}, per controller (each in a fresh process, replaying the traffic) ==")
     out = {}
+    tmp = tempfile.TemporaryDirectory(prefix="bench-traffic-")
+    traffic = {}
+    for duration_s in durations_s:
+        traffic[duration_s] = Path(tmp.name) / f"{duration_s:.0f}"
+        t0 = time.perf_counter()
+        record_traffic(override(load_scenario(scenario_path), {"duration_s": duration_s}), traffic[duration_s])
+        record_wall_s = time.perf_counter() - t0
+    out["traffic recorder"] = dict(sim_s_per_wall_s=durations_s[-1] / record_wall_s)
+    print(f"{'traffic recorder':<20} {durations_s[-1] / record_wall_s:8.1f} sim s / wall s    (once for all controllers)")
     for name in CONTROLLERS:
         figures = []
         for duration_s in durations_s:
             res = subprocess.run(
-                [sys.executable, "-c", _SIM_CHILD, scenario_path, name, str(duration_s)],
+                [sys.executable, "-c", _SIM_CHILD, scenario_path, name, str(duration_s), str(traffic[duration_s])],
                 capture_output=True,
                 text=True,
                 check=True,
@@ -257,6 +274,7 @@ def bench_sim(
             for d, f in zip(durations_s, figures, strict=True)
         )
         print(f"{name:<20} {speed:8.1f} sim s / wall s    peak RSS {rss}")
+    tmp.cleanup()
     return out
 
 
@@ -266,10 +284,29 @@ def bench_sweep() -> dict:
     return bench_sweep_scaling()
 
 
-SECTIONS = (bench_detector, bench_render, bench_sim, bench_sweep)
+def bench_night_sample() -> dict:
+    from experiments.bench.night import bench_night
+
+    return bench_night()
 
 
-def main() -> int:
+SECTIONS = (bench_detector, bench_render, bench_sim, bench_sweep, bench_night_sample)
+
+
+def main(argv: list[str] | None = None) -> int:
+    from experiments.bench.night import WHOLE_NIGHT_S, bench_night
+
+    parser = argparse.ArgumentParser(prog="python -m experiments.bench", description=__doc__.split("\n")[0])
+    parser.add_argument("--night", action="store_true",
+                        help="only the whole-night section, over the whole night (28,800 sim s; long)")  # fmt: skip
+    parser.add_argument("--night-s", type=float, default=None, metavar="SECONDS",
+                        help="with --night: simulate only the first SECONDS of the night (0 < SECONDS <= 28800)")
+    args = parser.parse_args(argv)
+    if args.night_s is not None and not (args.night and 0 < args.night_s <= WHOLE_NIGHT_S):
+        parser.error(f"--night-s: needs --night and a value in (0, {WHOLE_NIGHT_S:.0f}], got {args.night_s}")
+    if args.night:
+        bench_night(args.night_s or WHOLE_NIGHT_S)
+        return 0
     for section in SECTIONS:
         section()
         print()

@@ -570,3 +570,19 @@ def test_swaying_crowns_do_not_depend_on_the_frames_rendered_before() -> None:
     relit = backward.render(times[2], [], [0.0, 0.0]).image  # lamp change: view rebuilt
     again = renderer(params, street).render(times[2], [], [0.0, 0.0]).image
     assert np.array_equal(relit, again)
+
+
+def test_frames_under_changing_lamp_levels_do_not_depend_on_the_frames_rendered_before() -> None:
+    # crowns lit by the lamps (their lit poses are kept while the levels stay) and boxes on a
+    # distorted canvas (their frame boxes are kept): a fresh renderer must draw the same frame
+    trees = (StaticObject("tree", 9.0, 7.5, 3.0, 3.0, 6.0, 0.5), StaticObject("tree", 20.0, 8.0, 3.0, 3.0, 5.0, 0.5))
+    street = make_street(BARREL, scenery=trees)
+    params = settings(**{**EXACT_KW, "branch_sway": True, "wind_mps": 8.0, "distortion": True})
+    levels = [[1.0, 0.2], [0.5, 0.2], [1.0, 0.2], [1.0, 0.2], [0.2, 1.0], [1.0, 0.2]] * 2
+    agents = one_of_each(14.0)
+    sequence = renderer(params, street)
+    frames = [sequence.render(k / 5.0, agents, lv, frame_index=k) for k, lv in enumerate(levels)]
+    for k, lv in enumerate(levels):
+        alone = renderer(params, street).render(k / 5.0, agents, lv, frame_index=k)
+        assert np.array_equal(alone.image, frames[k].image) and alone.truth == frames[k].truth
+    assert not np.array_equal(frames[0].image, frames[1].image)
