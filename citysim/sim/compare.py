@@ -100,9 +100,15 @@ def run_comparison(
     out_dir: Path | None = None,
     workers: int = 1,
     scenario_file: str | None = None,
+    fidelity: str = "full",
 ) -> dict:
     """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
-    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these)."""
+    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
+
+    ``fidelity``: "full" renders and judges every camera frame; the calibrated "fast" sensor model
+    plugs in here (being added on its own branch); anything else is a ValueError."""
+    if fidelity != "full":
+        raise ValueError(f"fidelity: must be 'full' (fast mode is not in this branch), got {fidelity!r}")
     specs = resolve_controllers(scenario, controllers)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
