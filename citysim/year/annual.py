@@ -59,6 +59,12 @@ def _curve(table: ResponseTable, label: str, fig: str, levels: list[float]) -> C
     return lambda x: _interp(levels, values, x)
 
 
+def piece_energy_kwh(table: ResponseTable, label: str, piece: HourPiece, level: float) -> float:
+    """One controller's energy in one dark-hour piece at a traffic level, kWh."""
+    energy = _curve(table, label, "energy_kwh", [0.0, *table.levels])
+    return piece.hours * (table.idle[piece.clock_hour][label]["energy_kwh"] + energy(level))
+
+
 def annual_figures(table: ResponseTable, pieces: list[tuple[HourPiece, int, float]], scenario: Scenario,
                    year: YearSpec) -> dict:
     """year.json's figures. ``pieces``: (hour piece, month of its night 1..12, traffic level)."""
