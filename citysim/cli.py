@@ -206,7 +206,7 @@ def cmd_year(args) -> int:
 
     scenario = load_scenario(args.scenario)
     year = year_spec(scenario, str(args.scenario), latitude_deg=args.lat, longitude_deg=args.lon,
-                     timezone=args.timezone, year=args.year)
+                     timezone=args.timezone, year=args.year, sample_s=args.sample_s)
     names = [n.strip() for n in args.controllers.split(",") if n.strip()] if args.controllers else None
     resolve_controllers(scenario, names)  # unknown names fail here, before any work
     check_output_dir(args.out, "citysim year", YEAR_OUTPUTS)
@@ -222,9 +222,10 @@ def cmd_year(args) -> int:
     except CountsError as exc:
         print(f"error: --counts: {exc}", file=sys.stderr)
         return USAGE_EXIT
+    runs, sim_s = table_runs(plan)
     print(f"{scenario.name} at {year.latitude_deg:g}, {year.longitude_deg:g} ({year.timezone}), {year.year}: "
           f"{len(plan.spans)} nights, {sum(p.hours for p, _, _ in plan.pieces):,.0f} dark hours; "
-          f"table: {table_runs(plan)} hour-runs at {fidelity} fidelity")
+          f"table: {runs} hour-runs at {fidelity} fidelity, {sim_s:,.0f} simulated s per controller")
     result = run_year(plan, args.out, names, workers=args.workers or default_workers(), fidelity=fidelity,
                       check_nights=args.check_nights, progress=not args.no_progress,
                       scenario_file=str(args.scenario))
@@ -253,6 +254,9 @@ def _add_year(sub) -> None:
     y.add_argument("--lon", type=number(float, ge=-180, le=180, unit="deg"), help="site longitude, east positive")
     y.add_argument("--timezone", help="IANA time zone of the site, e.g. Europe/Berlin")
     y.add_argument("--year", type=number(int, ge=1900, le=2200), help="calendar year (default: the scenario's)")
+    y.add_argument("--sample-s", type=number(float, ge=30, le=14400, unit="s"),
+                   help="simulated seconds measured per traffic level (default: the scenario's year.sample_s); "
+                        "longer is steadier and slower")
     y.add_argument("--counts", type=Path, help="hourly traffic counts CSV: date_or_weekday,hour,class,count")
     y.add_argument("--controllers", help="comma-separated controller names (default: the scenario's list); "
                                          "always_on and oracle are added")

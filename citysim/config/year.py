@@ -48,7 +48,7 @@ class YearSpec(Spec):
         "[0] the hour just before, [1] the one before that, ...; the last value holds",
     )
     traffic_levels: tuple[float, ...] = Field(
-        default=(0.25, 0.5, 1.0, 2.0),
+        default=(0.5, 1.0, 2.0),
         description="traffic levels (multiples of every rate_per_hour) simulated for the response "
         "table; level 0 (nobody) is always added",
     )

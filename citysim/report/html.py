@@ -287,7 +287,7 @@ def write_report(folder: str | Path, plots: list[Path] | None = None) -> Path:
     page = "\n".join([
         "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
         f"<title>{html.escape(title)}</title><style>{STYLE}</style></head><body>",
-        f"<h1>{html.escape(title)}</h1>", body, year_body, "<h2>Plots</h2>" if paths else "", _notes(folder),
+        f"<h1>{html.escape(title)}</h1>", body, year_body, "<h2>Plots</h2>" if kind != "year" else "", _notes(folder),
         *(_figure(p, kind, names) for p in paths),
         f"<p><small>Written {stamp} from {html.escape(str(folder.resolve()))}; "
         f"plots also in {html.escape(str(folder / 'plots'))}/.</small></p>",

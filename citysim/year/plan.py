@@ -17,6 +17,7 @@ from citysim.config.scenario import Scenario
 from citysim.config.year import YearSpec
 from citysim.year.counts_csv import HourlyCounts, counted_level, read_counts
 from citysim.year.factors import scenario_level
+from citysim.year.table import plan_cells
 from citysim.year.twilight import DarkSpan, HourPiece, dark_spans, hour_pieces
 
 
@@ -64,6 +65,8 @@ def prepare_year(scenario: Scenario, year: YearSpec, counts_path: Path | None = 
     return plan
 
 
-def table_runs(plan: YearPlan) -> int:
-    """How many hour-runs (comparisons of every controller) the table needs."""
-    return len(plan.year.traffic_levels) + len(set(plan.dark_hours) | {int(plan.scenario.start_hour)})
+def table_runs(plan: YearPlan) -> tuple[int, float]:
+    """How many hour-runs (comparisons of every controller) the table needs, and the seconds they
+    simulate per controller (warm-ups included)."""
+    cells = plan_cells(plan.scenario, plan.year, plan.dark_hours)
+    return len(cells), sum(c.duration_s for c in cells)

@@ -41,6 +41,8 @@ J_PER_KWH = 3.6e6
 #: A walker's speed for the default warm-up (the time to walk the street end to end), m/s.
 WARMUP_WALK_MPS = 1.3
 FIGURES = ("energy_kwh", "zone_entries", "lit_entries", "dark_s")
+#: An idle run's lamps settle (a schedule's lamps start full and fade in 1 s) before it is measured, s.
+IDLE_SETTLE_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -87,7 +89,7 @@ def plan_cells(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int]) ->
     levels = [Cell("level", lv, scenario.start_hour, warmup_s, year.sample_s)
               for lv in sorted(year.traffic_levels, reverse=True)]  # fmt: skip
     hours = sorted(set(dark_hours) | {int(scenario.start_hour)})
-    idle = [Cell("idle", 0.0, float(h), 0.0, year.idle_sample_s) for h in hours]
+    idle = [Cell("idle", 0.0, float(h), IDLE_SETTLE_S, year.idle_sample_s) for h in hours]
     return levels + idle
 
 
