@@ -55,3 +55,10 @@ def test_hours_add_idle_energy_and_what_their_traffic_costs_and_extend_past_the_
     assert c["energy_kwh_per_year"] == pytest.approx(0.5 * 1.0 + 1.0 * 0.5)  # traffic adds nothing
     assert c["reads_clock"] and c["lit_on_entry_rate"] is None and c["dark_s_per_year"] is None
     assert not a["reads_clock"] and a["lit_on_entry_rate"] == pytest.approx(1.0)
+
+
+def test_the_table_is_the_same_bit_for_bit_in_one_process_or_two(toy):
+    one = build_table(toy, toy.year, [22, 23], ["pir"], workers=1, progress=False)
+    two = build_table(toy, toy.year, [22, 23], ["pir"], workers=2, progress=False)
+    assert one.levels == two.levels and one.idle == two.idle
+    assert one.levels[1.0]["pir"]["zone_entries"] > 0  # the level run saw traffic in its window
