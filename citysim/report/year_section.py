@@ -126,7 +126,7 @@ def year_section(folder: str | Path) -> str:
     if not plot.exists():
         plot_year(folder)
     clocked = [label for label, f in r["controllers"].items() if f.get("reads_clock")]
-    note = (f"<p class='note'>{html.escape(', '.join(clocked))} light by the clock: the short samples show "
+    note = (f"<p class='note'>Lit by the clock: {html.escape(', '.join(clocked))}. The short samples show "
             "their light at one hour only, so they get no lit-on-entry or dark figure here.</p>" if clocked else "")
     above = r.get("dark_hours_above_table") or 0
     if above:
