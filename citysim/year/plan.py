@@ -15,7 +15,7 @@ from pydantic import ValidationError
 from citysim.config.base import ScenarioError, describe_validation_error
 from citysim.config.scenario import Scenario
 from citysim.config.year import YearSpec
-from citysim.year.counts_csv import HourlyCounts, counted_level, read_counts
+from citysim.year.counts_csv import CountsError, HourlyCounts, counted_level, coverage, read_counts
 from citysim.year.factors import scenario_level
 from citysim.year.table import plan_cells
 from citysim.year.twilight import DarkSpan, HourPiece, dark_spans, hour_pieces
@@ -62,6 +62,10 @@ def prepare_year(scenario: Scenario, year: YearSpec, counts_path: Path | None = 
     plan = YearPlan(scenario, year, spans, [], counts)
     plan.pieces = [(piece, span.night.month, plan.level_of(piece))
                    for span in spans for piece in hour_pieces(span, year.timezone)]  # fmt: skip
+    if counts is not None and counts.by_date and not coverage(counts, [p for p, _, _ in plan.pieces])["dated_rows"]:
+        dates = sorted(d for d, _ in counts.by_date)
+        raise CountsError(f"{counts.source}: none of its dated rows ({dates[0]} .. {dates[-1]}) falls in a dark "
+                          f"hour of {year.year}; give the counts' year with --year, or weekday rows")  # fmt: skip
     return plan
 
 

@@ -77,3 +77,11 @@ def test_a_scenario_without_a_year_section_needs_the_site(toy_file, tmp_path, ca
     path = _no_year(tmp_path, toy_file)
     assert main(["year", str(path), "--out", str(tmp_path / "y")]) == 2
     assert "no `year:` section" in capsys.readouterr().err
+
+
+def test_counts_from_another_year_are_refused_not_silently_unused(toy_file, tmp_path, capsys):
+    counts = tmp_path / "counts.csv"
+    counts.write_text("date_or_weekday,hour,class,count\n2024-01-05,22,vehicle,30\n")
+    assert main(["year", str(toy_file), "--out", str(tmp_path / "y"), "--counts", str(counts)]) == 2
+    err = capsys.readouterr().err
+    assert "2024-01-05" in err and "2025" in err and "--year" in err
