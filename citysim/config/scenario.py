@@ -26,6 +26,7 @@ from citysim.config.base import FieldPathError, ScenarioError, Spec, describe_va
 from citysim.config.kinds import AGENT_KINDS
 from citysim.config.street import LampsSpec, StreetSpec
 from citysim.config.traffic import TrafficSpec
+from citysim.config.year import YearSpec
 from detector.yamlfile import read_yaml_mapping
 
 __all__ = [
@@ -176,6 +177,7 @@ class Scenario(Spec):
     network: NetworkSpec = NetworkSpec()
     simulation: SimulationSpec = SimulationSpec()
     controllers: tuple[ControllerSpec, ...] = (ControllerSpec(name="always_on"),)
+    year: YearSpec | None = Field(default=None, description="site, tariff and traffic by day for `citysim year`")
 
     @model_validator(mode="before")
     @classmethod

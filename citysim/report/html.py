@@ -267,12 +267,17 @@ def write_report(folder: str | Path, plots: list[Path] | None = None) -> Path:
     ``plots``: PNGs already drawn for this folder (by ``plot_run`` or ``plot_sweep``), embedded
     as they are instead of drawing them again."""
     folder = Path(folder)
+    from citysim.report.year_section import year_section
+
+    year_body = year_section(folder)  # a year section wherever year.json is (`citysim year`)
     if (folder / "results.csv").exists():
         body, paths = _sweep_section(folder, plots)
         kind, names = "sweep", _sweep_caption_names(folder)
     elif (folder / "summary.json").exists():
         body, paths = _run_section(folder, plots)
         kind, names = "run", {}
+    elif year_body:
+        body, paths, kind, names = "", [], "year", {}
     else:
         raise PlotError(
             f"{folder}: neither a run folder (summary.json) nor a sweep folder (results.csv)"
@@ -282,7 +287,7 @@ def write_report(folder: str | Path, plots: list[Path] | None = None) -> Path:
     page = "\n".join([
         "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
         f"<title>{html.escape(title)}</title><style>{STYLE}</style></head><body>",
-        f"<h1>{html.escape(title)}</h1>", body, "<h2>Plots</h2>", _notes(folder),
+        f"<h1>{html.escape(title)}</h1>", body, year_body, "<h2>Plots</h2>" if kind != "year" else "", _notes(folder),
         *(_figure(p, kind, names) for p in paths),
         f"<p><small>Written {stamp} from {html.escape(str(folder.resolve()))}; "
         f"plots also in {html.escape(str(folder / 'plots'))}/.</small></p>",

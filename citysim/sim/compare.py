@@ -125,12 +125,18 @@ def run_comparison(
     workers: int = 1,
     scenario_file: str | None = None,
     replay_traffic: bool = True,
+    fidelity: str = "full",
 ) -> dict:
     """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
     (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
 
     ``replay_traffic``: simulate the traffic once and replay it to every controller (the default);
-    False steps a world per controller (the same results, bit for bit, at a higher cost)."""
+    False steps a world per controller (the same results, bit for bit, at a higher cost).
+
+    ``fidelity``: "full" renders and judges every camera frame; the calibrated "fast" sensor model
+    plugs in here (being added on its own branch); anything else is a ValueError."""
+    if fidelity != "full":
+        raise ValueError(f"fidelity: must be 'full' (fast mode is not in this branch), got {fidelity!r}")
     specs = resolve_controllers(scenario, controllers)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,

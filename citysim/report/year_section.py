@@ -1,0 +1,140 @@
+"""The year section of report.html, its monthly energy plot and the terminal table of `citysim year`.
+
+Reads DIR/year.json only (written by ``citysim.year.run``), so the report needs nothing of the
+simulation. Every figure has a sentence beside it saying how to read it.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from citysim.report.common import controller_color, fmt_num, fmt_pct, fmt_quantity, save  # noqa: E402
+
+MONTHS = ("Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec")
+MONTHLY_PLOT = "monthly_energy.png"
+MONTHLY_HOWTO = (
+    "Energy each controller uses in each month, kWh: one line per controller. Months with long nights "
+    "sit high; the gap between always_on and a controller is its saving that month, and the oracle's "
+    "line is the lowest any controller can go without leaving someone in the dark."
+)
+TABLE_HOWTO = (
+    "Per controller over the whole year: energy, its saving against always-on, cost at the scenario's "
+    "tariff, CO2 at its grid factor, and the AECI (EN 13201-5's annual energy per square metre lit, "
+    "Wh/m2: lower is better, and it compares streets of different sizes). Lit on entry is the share "
+    "of all zone entries of the year whose lamp was already at full level; dark s is the seconds road "
+    "users spent in a zone below full, summed over the year."
+)
+
+
+def read_year(folder: Path) -> dict:
+    return json.loads((Path(folder) / "year.json").read_text())
+
+
+def plot_year(folder: str | Path) -> list[Path]:
+    """DIR/plots/monthly_energy.png from DIR/year.json; returns the paths drawn."""
+    folder = Path(folder)
+    result = read_year(folder)
+    labels = list(result["controllers"])
+    fig, ax = plt.subplots(figsize=(8, 4.2))
+    for label in labels:
+        kwh = result["controllers"][label]["monthly_energy_kwh"]
+        ax.plot(range(12), kwh, marker="o", ms=3.5, label=label, color=controller_color(label, labels),
+                lw=2.2 if label in ("always_on", "oracle") else 1.4)  # fmt: skip
+    ax.set_xticks(range(12), MONTHS)
+    ax.set_ylabel("energy per month (kWh)")
+    ax.set_ylim(bottom=0)
+    ax.set_title(f"{result['scenario']}: energy per month, {result['year']}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncols=2)
+    return [save(fig, folder / "plots" / MONTHLY_PLOT)]
+
+
+def _rows(result: dict) -> list[list[str]]:
+    cur = result["currency"]
+    rows = []
+    for label, f in result["controllers"].items():
+        rows.append([label, fmt_quantity(f["energy_kwh_per_year"], "kWh"), fmt_pct(f["savings_vs_always_on"]),
+                     fmt_quantity(f["cost_per_year"], cur), fmt_quantity(f["co2_kg_per_year"], "kg"),
+                     fmt_quantity(f["aeci_wh_per_m2"], "Wh/m2"), fmt_pct(f["lit_on_entry_rate"]),
+                     fmt_num(f["dark_s_per_year"])])  # fmt: skip
+    return rows
+
+
+HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "dark s / year"]
+
+
+def year_table(result: dict) -> str:
+    """The annual figures as a plain-text table for the terminal."""
+    rows = [HEAD, *_rows(result)]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(HEAD))]
+    lines = ["  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True)))
+             for r in rows]  # fmt: skip
+    return "\n".join([lines[0], "-" * len(lines[0]), *lines[1:]])
+
+
+def _html_table(head: list[str], rows: list[list[str]]) -> str:
+    out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
+    out += ["<tr>" + "".join(f'<td{" class=l" if i == 0 else ""}>{html.escape(c)}</td>' for i, c in enumerate(r))
+            + "</tr>" for r in rows]  # fmt: skip
+    return '<div class="scroll">' + "\n".join(out) + "</table></div>"
+
+
+def _facts(r: dict) -> str:
+    site = r["site"]
+    counted = r.get("counted_hours")
+    traffic = ("the scenario's hourly profiles x its weekday and monthly factors" if not counted else
+               f"hourly counts from {r['traffic_source']} ({fmt_num(counted['dated_rows'])} h from dated rows, "
+               f"{fmt_num(counted['weekday_rows'])} h from weekday rows, the rest from the scenario's factors)")
+    return (f"<p>Site {site['latitude_deg']:g}, {site['longitude_deg']:g} ({html.escape(site['timezone'])}), "
+            f"{r['year']}: {r['nights_with_darkness']} nights with civil darkness, "
+            f"{fmt_num(r['dark_hours_per_year'])} dark hours (civil dusk to civil dawn). Traffic: "
+            f"{html.escape(traffic)}; mean level {fmt_num(r['mean_traffic_level'])} x the scenario's "
+            f"rate_per_hour. Lit area {fmt_num(r['lit_area_m2'])} m2 ({fmt_num(r['chain_length_m'])} m of lamp "
+            f"chain x {fmt_num(r['lit_width_m'])} m). The figures are read off {r['hour_runs']} simulated "
+            f"hour-runs at {html.escape(r['fidelity'])} fidelity ({fmt_num(r['sample_s'])} s measured per "
+            f"traffic level after {fmt_num(r['warmup_s'])} s of warm-up, {fmt_num(r['idle_sample_s'])} s per "
+            f"idle clock hour), not simulated night by night.</p>")  # fmt: skip
+
+
+def _checks(r: dict) -> str:
+    if not r.get("check_nights"):
+        return ""
+    rows = [[c["night"], label, fmt_quantity(f["simulated_kwh"], "kWh"), fmt_quantity(f["table_kwh"], "kWh"),
+             fmt_pct(f["difference_share"])]
+            for c in r["check_nights"] for label, f in c["controllers"].items()]  # fmt: skip
+    return ("<h3>Check nights</h3><p class='howto'>Whole nights simulated dusk to dawn at full fidelity beside "
+            "the table's estimate of the same night: the difference is how far the table's shortcut "
+            "(short samples, levels read in between) is off for that night.</p>"
+            + _html_table(["night", "controller", "simulated", "table", "table - simulated"], rows))
+
+
+def year_section(folder: str | Path) -> str:
+    """The year section's HTML (table, monthly plot with its sentence, check nights); '' without year.json."""
+    folder = Path(folder)
+    if not (folder / "year.json").exists():
+        return ""
+    r = read_year(folder)
+    plot = folder / "plots" / MONTHLY_PLOT
+    if not plot.exists():
+        plot_year(folder)
+    clocked = [label for label, f in r["controllers"].items() if f.get("reads_clock")]
+    note = (f"<p class='note'>Lit by the clock: {html.escape(', '.join(clocked))}. The short samples show "
+            "their light at one hour only, so they get no lit-on-entry or dark figure here.</p>" if clocked else "")
+    above = r.get("dark_hours_above_table") or 0
+    if above:
+        note += (f"<p class='note'>{fmt_num(above)} dark hours were busier than the table's highest traffic "
+                 "level; their figures extend the table's last segment.</p>")
+    data = base64.b64encode(plot.read_bytes()).decode("ascii")
+    figure = (f'<figure id="fig-monthly_energy"><img alt="{MONTHLY_PLOT}" src="data:image/png;base64,{data}">'
+              f"<figcaption><b>Energy per month.</b> {html.escape(MONTHLY_HOWTO)} "
+              f'<span class="file">(plots/{MONTHLY_PLOT})</span></figcaption></figure>')
+    return ("<h2>A year</h2>" + _facts(r) + _html_table(HEAD, _rows(r))
+            + f"<p class='howto'>{html.escape(TABLE_HOWTO)}</p>" + note + figure + _checks(r))

@@ -1,0 +1,176 @@
+"""The hourly response table: what each controller does in one hour at a given traffic level.
+
+A year cannot be simulated night by night, and the physics of the street (every agent moved
+30 times a second, once per controller) is most of a run's cost, so the table is small:
+
+* one *level run* per traffic level (``year.traffic_levels``), at the scenario's ``start_hour``:
+  every class at ``level x rate_per_hour``, the street filled for ``warmup_s`` first, then
+  ``sample_s`` measured. It gives what traffic costs: energy above the idle lamps, zone
+  entries, entries already lit, dark seconds;
+* one *idle run* per clock hour that can be dark, with nobody about (animals only) for
+  ``idle_sample_s``: the energy of lamps left to their clock (a part-night schedule dims at
+  midnight; a sensing lamp idles the same at every hour).
+
+An hour's energy is then its idle energy plus what its traffic level adds at the reference
+hour (``annual``). Each run is one ``citysim.sim.compare.run_comparison`` of every controller
+on the same traffic, written to a scratch folder whose lamps.csv and objects.csv give the
+figures inside the measured window only. Figures are per hour (window totals x 3600 / window).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import multiprocessing as mp
+import shutil
+import tempfile
+from collections import defaultdict
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from tqdm import tqdm
+
+from citysim.config.scenario import Scenario, override
+from citysim.config.year import YearSpec
+from citysim.sim.compare import resolve_controllers, run_comparison
+from citysim.year.factors import target_classes
+
+J_PER_KWH = 3.6e6
+#: A walker's speed for the default warm-up (the time to walk the street end to end), m/s.
+WARMUP_WALK_MPS = 1.3
+FIGURES = ("energy_kwh", "zone_entries", "lit_entries", "dark_s")
+#: An idle run's lamps settle (a schedule's lamps start full and fade in 1 s) before it is measured, s.
+IDLE_SETTLE_S = 5.0
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One run of the table: a level run (traffic, at the reference hour) or an idle run (an hour)."""
+
+    kind: str  # "level" | "idle"
+    level: float  # multiple of every class's rate_per_hour (0 for idle runs)
+    start_hour: float  # clock hour at t = 0
+    warmup_s: float
+    sample_s: float
+
+    @property
+    def duration_s(self) -> float:
+        return self.warmup_s + self.sample_s
+
+
+@dataclass
+class ResponseTable:
+    """Per-hour figures per controller: ``levels[L][label]`` and ``idle[hour][label]``, each a
+    {figure: value per hour} mapping (figures: ``FIGURES``)."""
+
+    reference_hour: int
+    levels: dict[float, dict[str, dict[str, float]]]
+    idle: dict[int, dict[str, dict[str, float]]]
+    labels: list[str]
+    cells: list[Cell]
+    wall_s: float = 0.0
+
+    def as_dict(self) -> dict:
+        return {"reference_hour": self.reference_hour, "labels": self.labels,
+                "levels": {str(k): v for k, v in self.levels.items()},
+                "idle": {str(k): v for k, v in self.idle.items()},
+                "runs": [asdict(c) for c in self.cells], "wall_s": self.wall_s}  # fmt: skip
+
+
+def default_warmup_s(scenario: Scenario, year: YearSpec) -> float:
+    return year.warmup_s if year.warmup_s is not None else scenario.street.length_m / WARMUP_WALK_MPS
+
+
+def plan_cells(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int]) -> list[Cell]:
+    """The table's runs, heaviest first (the busiest level runs, then the idle hours)."""
+    warmup_s = default_warmup_s(scenario, year)
+    levels = [Cell("level", lv, scenario.start_hour, warmup_s, year.sample_s)
+              for lv in sorted(year.traffic_levels, reverse=True)]  # fmt: skip
+    hours = sorted(set(dark_hours) | {int(scenario.start_hour)})
+    idle = [Cell("idle", 0.0, float(h), IDLE_SETTLE_S, year.idle_sample_s) for h in hours]
+    return levels + idle
+
+
+def cell_variant(scenario: Scenario, cell: Cell) -> Scenario:
+    """The scenario of one run: its clock hour and length, every class at the cell's level with a flat
+    profile, no scripted test agents (they are not part of a typical hour)."""
+    updates: dict = {"duration_s": cell.duration_s, "start_hour": cell.start_hour, "traffic.scripted": []}
+    for name, spec in target_classes(scenario).items():
+        updates[f"traffic.classes.{name}.rate_per_hour"] = spec.rate_per_hour * cell.level
+        updates[f"traffic.classes.{name}.hourly_profile"] = []
+    return override(scenario, updates)
+
+
+def window_figures(folder: Path, labels: Sequence[str], t0_s: float, t1_s: float) -> dict[str, dict[str, float]]:
+    """Per-hour figures of each controller inside [t0_s, t1_s) from a run folder's CSVs: energy from
+    lamps.csv (power sampled each second), entries, lit entries and dark seconds of the zone entries
+    made inside the window from objects.csv."""
+    totals = {label: dict.fromkeys(FIGURES, 0.0) for label in labels}
+    with open(folder / "lamps.csv", newline="") as fh:
+        for row in csv.DictReader(fh):
+            if t0_s <= float(row["t_s"]) < t1_s:
+                totals[row["controller"]]["energy_kwh"] += float(row["power_w"]) / J_PER_KWH  # 1 s each
+    with open(folder / "objects.csv", newline="") as fh:
+        for row in csv.DictReader(fh):
+            if t0_s <= float(row["t_enter_s"]) < t1_s:
+                t = totals[row["controller"]]
+                t["zone_entries"] += 1
+                t["lit_entries"] += int(row["lit_on_entry"])
+                t["dark_s"] += float(row["dark_s"] or 0.0)
+    per_hour = 3600.0 / (t1_s - t0_s)
+    return {label: {k: v * per_hour for k, v in figs.items()} for label, figs in totals.items()}
+
+
+def run_cell(scenario: Scenario, cell: Cell, names: list[str] | None, fidelity: str) -> dict:
+    """One run of the table (in a worker process): its per-hour figures per controller."""
+    variant = cell_variant(scenario, cell)
+    folder = Path(tempfile.mkdtemp(prefix="citysim-year-")) / "run"
+    try:
+        summary = run_comparison(variant, names, workers=1, fidelity=fidelity, out_dir=folder)
+        labels = list(summary["controllers"])
+        return window_figures(folder, labels, cell.warmup_s, cell.duration_s)
+    finally:
+        shutil.rmtree(folder.parent, ignore_errors=True)
+
+
+def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], names: list[str] | None = None,
+                *, workers: int = 1, fidelity: str = "full", progress: bool = True) -> ResponseTable:
+    """Run every cell (``workers`` processes) and gather the table; a bar shows simulated seconds
+    done, their rate and the time left."""
+    import time
+
+    cells = plan_cells(scenario, year, dark_hours)
+    labels = [s.display_name for s in resolve_controllers(scenario, names)]
+    cost = {c: c.duration_s * len(labels) for c in cells}
+    bar = tqdm(total=sum(cost.values()), unit="sim s", disable=not progress,
+               desc=f"{scenario.name}: {len(cells)} hour-runs x {len(labels)} controllers",
+               bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
+    start = time.perf_counter()
+    results: dict[Cell, dict] = {}
+    if workers <= 1:
+        for cell in cells:
+            results[cell] = run_cell(scenario, cell, names, fidelity)
+            bar.update(cost[cell])
+    else:
+        ctx = mp.get_context("spawn")  # fresh interpreters, as run_comparison's own workers
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            futures = {pool.submit(run_cell, scenario, c, names, fidelity): c for c in cells}
+            for done in as_completed(futures):
+                results[futures[done]] = done.result()
+                bar.update(cost[futures[done]])
+    bar.close()
+    levels: dict[float, dict] = {}
+    idle: dict[int, dict] = defaultdict(dict)
+    for cell in cells:  # in plan order, whatever order they finished in
+        if cell.kind == "level":
+            levels[cell.level] = results[cell]
+        else:
+            idle[int(cell.start_hour)] = results[cell]
+    return ResponseTable(int(scenario.start_hour), dict(sorted(levels.items())), dict(idle), labels, cells,
+                         time.perf_counter() - start)
+
+
+def load_table(path: Path) -> dict:
+    return json.loads(Path(path).read_text())

@@ -1,0 +1,64 @@
+"""Annual sums: AECI by hand on a one-hour year, and how the table is read between and beyond levels."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+import pytest
+
+from citysim.year.annual import annual_figures, lit_area_m2
+from citysim.year.table import ResponseTable, build_table
+from citysim.year.twilight import HourPiece
+
+
+def test_aeci_of_always_on_on_a_one_hour_year_is_the_hand_computed_one(toy):
+    """Two 60 W lamps burning one hour: 120 Wh over a 60 m chain x 10.8 m = 648 m2."""
+    one_hour = [(HourPiece(dt.date(2025, 1, 6), 22, 1.0), 1, 1.0)]
+    table = build_table(toy, toy.year, [22], ["always_on"], workers=1, progress=False)
+    assert table.labels == ["always_on", "oracle"]  # the bound is in every comparison
+    figures = annual_figures(table, one_hour, toy, toy.year)
+    assert lit_area_m2(toy, toy.year) == pytest.approx((648.0, 60.0, 10.8))
+    always_on = figures["controllers"]["always_on"]
+    assert always_on["energy_kwh_per_year"] == pytest.approx(0.120, rel=1e-9)
+    assert always_on["aeci_wh_per_m2"] == pytest.approx(120.0 / 648.0, rel=1e-9)
+    assert always_on["cost_per_year"] == pytest.approx(0.120 * 0.3, rel=1e-9)
+    assert always_on["co2_kg_per_year"] == pytest.approx(0.120 * 0.4, rel=1e-9)
+    assert always_on["monthly_energy_kwh"][0] == pytest.approx(0.120) and sum(always_on["monthly_energy_kwh"][1:]) == 0
+    assert always_on["lit_on_entry_rate"] == 1.0 and always_on["dark_s_per_year"] == 0.0
+    # the oracle lights only for the traffic: less than always-on, more than two idle dimmed lamps
+    oracle = figures["controllers"]["oracle"]
+    assert 0.0 < oracle["savings_vs_always_on"] < 1.0
+    assert oracle["zone_entries_per_year"] == always_on["zone_entries_per_year"] > 0  # same traffic
+
+
+def _figs(energy_kwh: float, entries: float = 0.0, lit: float = 0.0, dark_s: float = 0.0) -> dict:
+    return {"energy_kwh": energy_kwh, "zone_entries": entries, "lit_entries": lit, "dark_s": dark_s}
+
+
+def test_hours_add_idle_energy_and_what_their_traffic_costs_and_extend_past_the_top_level(toy):
+    table = ResponseTable(
+        reference_hour=22,
+        levels={1.0: {"always_on": _figs(2.0, 10, 10), "clock": _figs(1.0, 10, 10)},
+                2.0: {"always_on": _figs(3.0, 20, 20), "clock": _figs(1.0, 20, 20)}},
+        idle={22: {"always_on": _figs(1.0), "clock": _figs(1.0)},
+              3: {"always_on": _figs(1.0), "clock": _figs(0.5)}},  # "clock" dims at 03:00
+        labels=["always_on", "clock"], cells=[])  # fmt: skip
+    pieces = [(HourPiece(dt.date(2025, 1, 6), 22, 0.5), 1, 1.5),   # half an hour at level 1.5
+              (HourPiece(dt.date(2025, 2, 7), 3, 1.0), 2, 3.0)]    # a whole hour above the table
+    f = annual_figures(table, pieces, toy, toy.year)
+    a = f["controllers"]["always_on"]
+    # 0.5 h x (1 + 1.5) + 1 h x (1 + 3: the last segment, +1 kWh per level, goes on)
+    assert a["monthly_energy_kwh"][:2] == pytest.approx([1.25, 4.0])
+    assert a["zone_entries_per_year"] == pytest.approx(0.5 * 15 + 1.0 * 30)
+    assert f["dark_hours_above_table"] == pytest.approx(1.0)
+    c = f["controllers"]["clock"]
+    assert c["energy_kwh_per_year"] == pytest.approx(0.5 * 1.0 + 1.0 * 0.5)  # traffic adds nothing
+    assert c["reads_clock"] and c["lit_on_entry_rate"] is None and c["dark_s_per_year"] is None
+    assert not a["reads_clock"] and a["lit_on_entry_rate"] == pytest.approx(1.0)
+
+
+def test_the_table_is_the_same_bit_for_bit_in_one_process_or_two(toy):
+    one = build_table(toy, toy.year, [22, 23], ["pir"], workers=1, progress=False)
+    two = build_table(toy, toy.year, [22, 23], ["pir"], workers=2, progress=False)
+    assert one.levels == two.levels and one.idle == two.idle
+    assert one.levels[1.0]["pir"]["zone_entries"] > 0  # the level run saw traffic in its window
