@@ -24,6 +24,8 @@ ALLOWED_STAGES = {
     "metrics": {"config", "world", "control"},
     "sim": {"config", "world", "render", "control", "metrics"},
     "sweep": {"config", "world", "control", "metrics", "sim"},
+    # a year is a table of runs through sim; its report section reads year.json, not the package
+    "year": {"config", "world", "control", "metrics", "sim"},
     "report": {"config", "world", "render", "control", "metrics", "sim", "sweep"},
 }
 #: Compiled per-pixel kernels may be long: numba cannot call helpers that cheaply.
