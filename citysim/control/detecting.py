@@ -10,6 +10,7 @@ detections that carry no track (the paper's per-frame path) share one window, as
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from citysim.config.kinds import AGENT_KINDS
