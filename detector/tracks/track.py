@@ -9,11 +9,14 @@ right of the pole foot, m). Velocities are differences over ``VELOCITY_WINDOW_S`
 over half a second the same jitter is 1 m/s). Image velocities are px per frame of the box
 centre, for predicting the next box.
 
-Pooling the per-frame class probabilities (``POOLINGS``): ``mean_log`` (the default) averages
-the log-probabilities of the last ``POOL_FRAMES`` frames and renormalises: the frames as
-independent evidence about one object, tempered by their number so a long track is not
-certain; ``mean`` averages the probabilities; ``last`` is the newest frame alone. The choice
-was measured on the paper's scene replicas (``experiments.paper``; figures in README).
+Pooling the per-frame class probabilities (``POOLINGS``) into P(target): ``mean_log`` (the
+default) averages the log-probabilities of the last ``POOL_FRAMES`` frames and renormalises:
+the frames as independent evidence about one object, tempered by their number so a long track
+is not certain; ``mean`` averages the probabilities; ``last`` is the newest frame alone. The
+choice was measured on the paper's scene replicas (``experiments.paper``; figures in README).
+Which target class a track is takes its whole life (``log_sums``: the summed log-probabilities
+of every frame): a walker whose silhouette looks like a cyclist's now and then stays a
+pedestrian, while P(target) answers within a second.
 """
 
 from __future__ import annotations
@@ -78,6 +81,8 @@ class Track:
     centres_x_px: deque = field(default_factory=lambda: deque(maxlen=SWAY_FRAMES))
     probabilities: deque = field(default_factory=lambda: deque(maxlen=POOL_FRAMES))
     pooled: list[float] = field(default_factory=list)
+    #: summed log-probabilities per class over every frame of the track (its class)
+    log_sums: list[float] = field(default_factory=list)
     #: frames (within the acceleration window) whose acceleration exceeded the bound
     accel_violations: deque = field(default_factory=lambda: deque(maxlen=ACCEL_FRAMES))
     #: the last n target decisions as bits, newest in bit 0 (k-of-n confirmation)
@@ -141,7 +146,12 @@ class Track:
         self.widths_m.append(features[0])
         self.heights_m.append(features[1])
         self.centres_x_px.append(x + w / 2)
+        self._add_probabilities(probabilities)
+
+    def _add_probabilities(self, probabilities) -> None:
         self.probabilities.append(probabilities)
+        logs = [math.log(p if p > _P_FLOOR else _P_FLOOR) for p in probabilities]
+        self.log_sums = [a + b for a, b in zip(self.log_sums, logs, strict=True)] if self.log_sums else logs
 
     def start(self, box_px, ground, features, probabilities) -> None:
         """The first frame's region (the fields the constructor did not set)."""
@@ -151,7 +161,7 @@ class Track:
         self.widths_m.append(features[0])
         self.heights_m.append(features[1])
         self.centres_x_px.append(x + w / 2)
-        self.probabilities.append(probabilities)
+        self._add_probabilities(probabilities)
 
     def _update_velocity(self, frame: int) -> None:
         positions = self.positions

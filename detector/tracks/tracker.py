@@ -233,7 +233,9 @@ class TrackSet:
             track.still_frame = track.last_frame
         track.pooled = pooled = pool_probabilities(track.probabilities, self.pooling)
         track.p_target = 1.0 - pooled[self.noise_col]
-        track.cls = self.class_names[pooled.index(max(pooled))]
+        noise, sums = self.noise_col, track.log_sums
+        best = max((c for c in range(len(sums)) if c != noise), key=sums.__getitem__)
+        track.cls = self.class_names[best]  # the likeliest target class over its life
         reason = reject_reason(track, self.limits)
         if reason is None and track.p_target < self.target_threshold:
             reason = "classified noise"
