@@ -83,6 +83,9 @@ class Track:
     pooled: list[float] = field(default_factory=list)
     #: summed log-probabilities per class over every frame of the track (its class)
     log_sums: list[float] = field(default_factory=list)
+    #: per-frame log-probabilities of the pooling window and their running sum (``mean_log``)
+    window_logs: deque = field(default_factory=lambda: deque(maxlen=POOL_FRAMES))
+    window_log_sums: list[float] = field(default_factory=list)
     #: frames (within the acceleration window) whose acceleration exceeded the bound
     accel_violations: deque = field(default_factory=lambda: deque(maxlen=ACCEL_FRAMES))
     #: the last n target decisions as bits, newest in bit 0 (k-of-n confirmation)
@@ -151,7 +154,27 @@ class Track:
     def _add_probabilities(self, probabilities) -> None:
         self.probabilities.append(probabilities)
         logs = [math.log(p if p > _P_FLOOR else _P_FLOOR) for p in probabilities]
-        self.log_sums = [a + b for a, b in zip(self.log_sums, logs, strict=True)] if self.log_sums else logs
+        if not self.log_sums:
+            self.log_sums, self.window_log_sums = list(logs), list(logs)
+            self.window_logs.append(logs)
+            return
+        self.log_sums = [a + b for a, b in zip(self.log_sums, logs, strict=True)]
+        sums = self.window_log_sums
+        if len(self.window_logs) == self.window_logs.maxlen:  # the oldest frame leaves the window
+            sums = [a - b for a, b in zip(sums, self.window_logs[0], strict=True)]
+        self.window_logs.append(logs)
+        self.window_log_sums = [a + b for a, b in zip(sums, logs, strict=True)]
+
+    def pooled_probabilities(self, pooling: str = "mean_log") -> list[float]:
+        """``pool_probabilities`` of the window; ``mean_log`` from the running sums (O(classes))."""
+        if pooling != "mean_log":
+            return pool_probabilities(self.probabilities, pooling)
+        n = len(self.window_logs)
+        means = [v / n for v in self.window_log_sums]
+        top = max(means)
+        exp = [math.exp(v - top) for v in means]
+        total = sum(exp)
+        return [e / total for e in exp]
 
     def start(self, box_px, ground, features, probabilities) -> None:
         """The first frame's region (the fields the constructor did not set)."""

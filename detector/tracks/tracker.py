@@ -32,7 +32,7 @@ from detector.tracks.associate import Gates, associate
 from detector.tracks.ground import GroundProjector
 from detector.tracks.plausibility import PlausibilityLimits, note_acceleration, reject_reason
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
-from detector.tracks.track import POOLINGS, Track, pool_probabilities
+from detector.tracks.track import POOLINGS, Track
 
 _DEFAULT_LIMITS = PlausibilityLimits()
 _DEFAULT_GATES = Gates()
@@ -231,7 +231,7 @@ class TrackSet:
         speed = track.speed_mps
         if speed is not None and speed < self.limits.still_mps:
             track.still_frame = track.last_frame
-        track.pooled = pooled = pool_probabilities(track.probabilities, self.pooling)
+        track.pooled = pooled = track.pooled_probabilities(self.pooling)
         track.p_target = 1.0 - pooled[self.noise_col]
         noise, sums = self.noise_col, track.log_sums
         best = max((c for c in range(len(sums)) if c != noise), key=sums.__getitem__)
