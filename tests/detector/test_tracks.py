@@ -170,3 +170,51 @@ def test_per_frame_path_has_no_tracks(model):
         detections += det.process(clip.frame([walker(10.0, -2.5, k / FPS)]))
     assert detections and all(d.track_p_target is None and d.ground_x_m is None for d in detections)
     assert det.is_target(detections)  # decided on each frame's own P(target)
+
+
+def _track(track_id, box_px, image_velocity_px=(0.0, 0.0), sightings=5, ground=(10.0, 0.0)):
+    from detector.tracks.track import Track
+
+    track = Track(track_id, 0, FPS, list(box_px), *ground, sightings=sightings, last_frame=0)
+    track.image_velocity_px = image_velocity_px
+    return track
+
+
+def test_a_piece_inside_a_continued_tracks_box_joins_it():
+    from detector.tracks.reunite import ReuniteParams, fragment_groups
+
+    body = _track(1, (100, 50, 40, 80), (2.0, 0.0))  # predicted at x = 102
+    boxes = [(102, 50, 40, 60), (110, 112, 20, 18), (250, 60, 10, 30)]  # body, its legs, elsewhere
+    rows = [[0.5, 1.7], [0.4, 0.4], [0.2, 0.5]]
+    groups = fragment_groups([body], boxes, rows, [0, -1, -1], lambda idx: [0.5, 1.75], ReuniteParams())
+    assert groups == [[0, 1]]  # the legs join the body's region; the far speck stays alone
+
+
+def test_established_tracks_moving_together_join_only_if_the_union_fits_table1():
+    from detector.tracks.reunite import ReuniteParams, fragment_groups
+
+    front, back = _track(1, (100, 50, 50, 40), (-6.0, 0.0)), _track(2, (152, 50, 50, 40), (-6.2, 0.0))
+    boxes = [(94, 50, 50, 40), (146, 50, 50, 40)]
+    rows = [[2.0, 1.5], [2.0, 1.5]]
+    params = ReuniteParams()
+    # two halves of a car side on: the union (4.2 m x 1.5 m) is a vehicle
+    assert fragment_groups([front, back], boxes, rows, [0, 1], lambda idx: [4.2, 1.5], params) == [[0, 1]]
+    # a union no road user has the size of stays apart
+    assert fragment_groups([front, back], boxes, rows, [0, 1], lambda idx: [9.0, 1.5], params) == []
+    # moving apart: no join whatever the size
+    back.image_velocity_px = (6.0, 0.0)
+    assert fragment_groups([front, back], boxes, rows, [0, 1], lambda idx: [4.2, 1.5], params) == []
+    # too young to say they move together
+    back.image_velocity_px, back.sightings = (-6.2, 0.0), 2
+    assert fragment_groups([front, back], boxes, rows, [0, 1], lambda idx: [4.2, 1.5], params) == []
+
+
+def test_ground_gate_keeps_a_fast_car_whose_box_jumped():
+    from detector.tracks.associate import Gates, associate
+
+    car = _track(1, (100, 100, 30, 20), ground=(8.0, 0.0))
+    car.velocity_mps = (0.0, 15.0)  # 1 m per frame across the view
+    # next frame: the box moved 60 px (no overlap, two diagonals away) but the ground point is where predicted
+    assert associate([car], [(160, 100, 30, 20)], [(8.0, 1.0)], 1, Gates()) == [0]
+    # the same jump with the ground point 5 m off: no gate holds
+    assert associate([car], [(160, 100, 30, 20)], [(8.0, 6.0)], 1, Gates()) == [-1]
