@@ -4,8 +4,11 @@
     python -m detector train --camera CAM.yaml --out MODEL.joblib [--seed 0]
 
 Writes DIR/detections.csv (one row per classified region, noise included; boxes in the
-video's own pixels), DIR/annotated.mp4 (the video at its own size with the boxes drawn) and
-DIR/summary.json (counts, and the size the frames were processed at). User errors print one
+video's own pixels; each with its track: id, class, pooled P(target), ground position and
+speed), DIR/tracks.csv (one row per track: first and last frame, class, frames seen, mean
+speed, why it was not a target), DIR/annotated.mp4 (the video at its own size with the boxes,
+track ids and classes drawn) and DIR/summary.json (counts, and the size the frames were
+processed at). User errors print one
 line naming the argument, file or field and exit with code 2; nothing half-written is left
 behind, and an --out that cannot or should not be written is refused before any frame.
 """
@@ -35,9 +38,10 @@ from detector.video import (
     source_and_gray_frames,
 )
 
-CSV_HEADER = ["frame", "x", "y", "w", "h", "cls", "p_target", "width_m", "height_m", "area_m2", "distance_m"]
+CSV_HEADER = ["frame", "x", "y", "w", "h", "cls", "p_target", "width_m", "height_m", "area_m2", "distance_m",
+              "track_id", "track_cls", "track_p_target", "ground_x_m", "ground_y_m", "speed_mps"]
 #: What an output folder of this command holds; an earlier one may be replaced by a new run.
-DETECT_OUTPUTS = ("detections.csv", "annotated.mp4", "summary.json")
+DETECT_OUTPUTS = ("detections.csv", "tracks.csv", "annotated.mp4", "summary.json")
 USER_ERRORS = (CameraError, VideoError, FileNotFoundError, ValueError)
 MIN_MAX_WIDTH_PX = 64
 #: Training a model for one camera takes about this long on one core of a small machine, s
@@ -68,11 +72,13 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
     scale = frame_scale(info, max_width_px)
     model, model_name = _choose_model(cam, camera_file, model_path)
     detector = Detector(cam, model=model, max_distance_m=max_distance_m)
+    detector.tracks.keep_ended = True  # for tracks.csv
     summary = {"video": str(video), "camera": str(camera_file), "model": model_name,
                "boxes": "x, y, w, h in the video's own pixels (OpenCV boundingRect: columns x .. x+w-1)",
                "processing": scale.as_dict(), "max_distance_m": max_distance_m, "fps": info.fps}
     with staged_output(out_dir) as stage:
         counts = _detect_frames(detector, info, scale, stage, progress)
+        counts["tracks"] = write_tracks_csv(detector.tracks, stage / "tracks.csv")
         summary.update(counts)
         (stage / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return {**summary, "processing_size_px": scale.processing_px, "video_size_px": scale.source_px,
@@ -120,13 +126,44 @@ def _detect_frames(detector, info, scale: FrameScale, stage: Path, progress: boo
                 for det, (x, y, w, h) in zip(detections, boxes, strict=True):
                     wm, hm, am, dm = det.features[:4]
                     rows.writerow([n_frames - 1, x, y, w, h, det.cls, f"{det.p_target:.4f}",
-                                   f"{wm:.3f}", f"{hm:.3f}", f"{am:.3f}", f"{dm:.3f}"])
+                                   f"{wm:.3f}", f"{hm:.3f}", f"{am:.3f}", f"{dm:.3f}", det.track_id, det.track_cls,
+                                   _fixed(det.track_p_target, 4), _fixed(det.ground_x_m, 3),
+                                   _fixed(det.ground_y_m, 3), _fixed(det.speed_mps, 3)])
                     counts[det.cls] = counts.get(det.cls, 0) + 1
                 frames_with_target += detector.is_target(detections)
                 writer.write(draw_detections(source, detections, boxes_px=boxes))
     finally:
         writer.release()
     return {"frames": n_frames, "frames_with_target": frames_with_target, "regions_per_class": counts}
+
+
+def _fixed(value: float | None, digits: int) -> str:
+    """A number with ``digits`` decimals, or an empty cell for None (not known yet)."""
+    return "" if value is None else f"{value:.{digits}f}"
+
+
+TRACKS_HEADER = ["track_id", "first_frame", "last_frame", "frames_seen", "cls", "target_frames", "mean_speed_mps",
+                 "reject_reason", "merged_into"]
+
+
+def write_tracks_csv(tracks, path: Path) -> dict[str, int]:
+    """One row per track of the video (``detector.tracks``), by id; returns tracks per class.
+
+    ``cls`` is the class the track had most often while it was a target, 'noise' if it never
+    was one; ``reject_reason`` then says why (the reason of most of its frames);
+    ``merged_into`` names the track it was joined to as a fragment.
+    """
+    counts: dict[str, int] = {}
+    with open(path, "w", newline="") as fh:
+        out = csv.writer(fh)
+        out.writerow(TRACKS_HEADER)
+        for t in sorted([*tracks.ended, *tracks.tracks], key=lambda t: t.track_id):
+            cls = max(t.target_classes, key=t.target_classes.get) if t.target_classes else "noise"
+            reason = "" if t.target_classes else max(t.reasons, key=t.reasons.get, default="")
+            out.writerow([t.track_id, t.first_frame, t.last_frame, t.sightings, cls, t.target_frames,
+                          _fixed(t.mean_speed_mps, 3), reason, "" if t.merged_into is None else t.merged_into])
+            counts[cls] = counts.get(cls, 0) + 1
+    return counts
 
 
 def view_range_m(camera: CameraModel) -> float:
@@ -190,7 +227,7 @@ def _detect_parser() -> argparse.ArgumentParser:
     p.add_argument("video", type=Path, help="video file (any format OpenCV decodes)")
     p.add_argument("--camera", type=Path, required=True, help="camera YAML: CameraModel fields (see scenarios/cameras/)")
     p.add_argument("--out", type=Path, required=True,
-                   help="output folder for detections.csv, annotated.mp4 and summary.json: new, empty, or an "
+                   help="output folder for detections.csv, tracks.csv, annotated.mp4 and summary.json: new, empty, or an "
                         "earlier output of this command (replaced)")
     p.add_argument("--model", type=Path, default=None,
                    help="classifier .joblib (default: the general model, or one trained on the spot for a "
@@ -233,7 +270,8 @@ def main(argv: list[str] | None = None) -> int:
               f"{proc['video_width_px']}x{proc['video_height_px']} px")
     print(f"{summary['frames']} frames {scaled}; target in {summary['frames_with_target']} frames; "
           f"regions per class {summary['regions_per_class']}")
-    print(f"results written to {args.out}/: detections.csv, annotated.mp4, summary.json")
+    print(f"tracks per class {summary['tracks']}")
+    print(f"results written to {args.out}/: detections.csv, tracks.csv, annotated.mp4, summary.json")
     return 0
 
 

@@ -3,8 +3,13 @@
     segment (CLAHE, MOG2, morphology, contours)
     -> features of every inner region (eqs. 1-11, one undistortion call)
     -> division of regions merged with their light spot (section 5.2)
+    -> tracks (section 8.2, ``detector.tracks``): regions associated with the objects of
+       earlier frames on the ground, fragments of one object joined
     -> one classifier evaluation for all kept regions (section 5.4)
-    -> track ids across frames (section 8.2)
+    -> each track's pooled class and its physical plausibility: the target decision
+
+``tracking=False`` is the paper's per-frame path: every region decided on its own frame
+(``is_target``: its own P(target)), with the light box tracker of ``detector.confirm`` for ids.
 
 OpenCV's work is the floor of the frame's cost; everything above it is kept
 small. A frame holds a handful of regions, for which numpy's per-call cost
@@ -42,6 +47,7 @@ from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
 from detector.general_model import default_model
 from detector.roi import Crop, full_frame, range_crop
 from detector.segment import Regions, Segmenter, SegmenterParams
+from detector.tracks.tracker import TrackSet
 
 __all__ = ["Detection", "Detector", "numpy_predict_proba"]
 
@@ -57,7 +63,13 @@ class Detection:
     ``features`` are ``detector.features.FEATURE_NAMES`` (width m, height m,
     area m^2, distance m, tilt deg, camera height m); ``probabilities`` follow
     the model's ``classes_`` (``detector.classes.CLASSES``); ``p_target`` is
-    1 - P(noise).
+    1 - P(noise): all of this frame alone. The ``track_*`` fields are its track's
+    (``detector.tracks``; None on the per-frame path): ``track_cls`` the pooled class
+    ('noise' unless the track is a target), ``track_p_target`` the pooled P(target),
+    ``track_target`` the decision (plausible and pooled P(target) >= threshold),
+    ``track_reason`` why it is not a target; ``ground_x_m``/``ground_y_m`` the bottom
+    centre on the ground (world x along the street, y across, m), ``velocity_*_mps``
+    and ``speed_mps`` the track's ground velocity (None until known).
     """
 
     box_px: tuple[int, int, int, int]
@@ -66,6 +78,15 @@ class Detection:
     probabilities: np.ndarray
     p_target: float
     track_id: int | None
+    track_cls: str | None = None
+    track_p_target: float | None = None
+    track_target: bool = False
+    track_reason: str | None = None
+    ground_x_m: float | None = None
+    ground_y_m: float | None = None
+    velocity_x_mps: float | None = None
+    velocity_y_mps: float | None = None
+    speed_mps: float | None = None
 
 
 class Detector:
@@ -78,7 +99,9 @@ class Detector:
     False: the whole frame, as the paper's implementation does. ``equalise_tiles_only``: run
     CLAHE only on the full frame's tiles the crop needs rather than on the whole frame (faster;
     equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel or
-    two off the full frame's).
+    two off the full frame's). ``tracking``: decide per track (``detector.tracks``, the
+    default; ``tracks`` a configured ``TrackSet`` or None for the default one) or per frame
+    (False: the paper's path, ``tracker`` its light box tracker).
     """
 
     def __init__(
@@ -93,6 +116,8 @@ class Detector:
         tracker: Tracker | None = None,
         crop_to_range: bool = True,
         equalise_tiles_only: bool = False,
+        tracking: bool = True,
+        tracks: TrackSet | None = None,
     ) -> None:
         if not isinstance(camera, CameraModel):
             raise TypeError(f"Detector camera must be a CameraModel, got {type(camera).__name__}")
@@ -131,31 +156,44 @@ class Detector:
             else full_frame(camera.height_px, camera.width_px, params.clahe_tile_px)
         )
         self.segmenter = Segmenter(params, camera.fps, self.crop)
-        self.tracker = Tracker() if tracker is None else tracker
-        self.last_regions: Regions = Regions.empty(camera.height_px, camera.width_px)
         # per-camera constants, computed once rather than every frame
         self._frame_shape = (camera.height_px, camera.width_px)
         self._geometry = RegionGeometry(camera)
+        if tracking and tracks is None:
+            tracks = TrackSet(camera, self._class_names, self.target_threshold, geometry=self._geometry)
+        self.tracks: TrackSet | None = tracks if tracking else None
+        # what the controllers ask is_confirmed(track_id): the tracks, or the per-frame box tracker
+        self.tracker = self.tracks if self.tracks is not None else (Tracker() if tracker is None else tracker)
+        self.last_regions: Regions = Regions.empty(camera.height_px, camera.width_px)
 
     def reset_background(self) -> None:
         """Rebuild the background model (call when the lamp in view switches)."""
         self.segmenter.reset()
 
     def is_target(self, detections: Sequence[Detection]) -> bool:
-        """Whether any detection is a target at this detector's threshold."""
-        return any(d.p_target >= self.target_threshold for d in detections)
+        """Whether any detection is a target: its track is one (tracking), or its own P(target)
+        reaches this detector's threshold (per frame, and detections that carry no track)."""
+        threshold = self.target_threshold
+        if self.tracks is not None:
+            return any(
+                d.track_target if d.track_p_target is not None else d.p_target >= threshold for d in detections
+            )
+        return any(d.p_target >= threshold for d in detections)
+
+    def _nothing(self) -> list[Detection]:
+        """A frame with no region to classify: the tracks age (or the box tracker sees nothing)."""
+        if self.tracks is not None:
+            self.tracks.age()
+        else:
+            self.tracker.update_rows([], [])
+        return []
 
     def _sklearn_predict_proba(self, feats: np.ndarray) -> np.ndarray:
         # the rows are finite by construction (valid), so skip scikit-learn's re-check
         with sklearn.config_context(assume_finite=True):
             return self.model.predict_proba(feats)
 
-    def process(self, gray: np.ndarray, learning_rate: float | None = None) -> list[Detection]:
-        """Detect and classify the moving objects of one uint8 (H, W) frame.
-
-        ``learning_rate``: the background model's rate for this frame (default: MOG2's automatic
-        rate); see ``Segmenter.apply``.
-        """
+    def _check_frame(self, gray) -> None:
         if (
             not isinstance(gray, np.ndarray)
             or gray.shape != self._frame_shape
@@ -170,13 +208,30 @@ class Detector:
                 f"Detector.process needs a grayscale uint8 frame of shape {self._frame_shape} (the "
                 f"camera's height_px x width_px), got {got}"
             )
+
+    def _classify(self, rows: list, feats: np.ndarray) -> tuple[np.ndarray, list[float], list[int]]:
+        """(probabilities (N, 5), P(target) per region, most probable class index per region)."""
+        if self._proba_rows is not None and len(rows) <= SCALAR_MAX_REGIONS:
+            proba_rows = self._proba_rows(rows)
+            noise = self._noise_col
+            # the first maximum, as argmax
+            return np.array(proba_rows), [1.0 - p[noise] for p in proba_rows], [p.index(max(p)) for p in proba_rows]
+        proba = self._predict_proba(feats)
+        return proba, (1.0 - proba[:, self._noise_col]).tolist(), proba.argmax(axis=1).tolist()
+
+    def process(self, gray: np.ndarray, learning_rate: float | None = None) -> list[Detection]:
+        """Detect and classify the moving objects of one uint8 (H, W) frame.
+
+        ``learning_rate``: the background model's rate for this frame (default: MOG2's automatic
+        rate); see ``Segmenter.apply``.
+        """
+        self._check_frame(gray)
         regions = self.segmenter.apply(gray, learning_rate)
         self.last_regions = regions
         # a frame holds a handful of regions: per-region work is plain Python on lists
         # (numpy's per-call cost would exceed the arithmetic), arrays only where results go out
         if not regions.contours:
-            self.tracker.update_rows([], [])
-            return []
+            return self._nothing()
         boxes, areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
         rows = self._geometry.rows(boxes, areas)
         divided, _ = divide_rows(
@@ -193,31 +248,36 @@ class Detector:
                 if edge[i] and x > left and y > top and x + w < right and y + h < bottom:
                     edge[i] = False
             if all(edge):
-                self.tracker.update_rows([], [])
-                return []
+                return self._nothing()
             inner = [i for i, e in enumerate(edge) if not e]
             boxes, rows = [boxes[i] for i in inner], [rows[i] for i in inner]
+            areas = [areas[i] for i in inner]
         max_distance_m = self.max_distance_m
         keep = [j for j, row in enumerate(rows) if row is not None and row[3] <= max_distance_m]
         if not keep:
-            self.tracker.update_rows([], [])
-            return []
+            return self._nothing()
         rows = [rows[j] for j in keep]
         boxes = [boxes[j] for j in keep]
+        if self.tracks is not None:
+            prepared = self.tracks.prepare(boxes, [areas[j] for j in keep], rows)
+            boxes, rows = prepared.boxes_px, prepared.rows
         feats = np.array(rows)
-        if self._proba_rows is not None and len(rows) <= SCALAR_MAX_REGIONS:
-            proba_rows = self._proba_rows(rows)
-            proba = np.array(proba_rows)
-            noise = self._noise_col
-            p_target = [1.0 - p[noise] for p in proba_rows]
-            labels = [p.index(max(p)) for p in proba_rows]  # the first maximum, as argmax
-        else:
-            proba = self._predict_proba(feats)
-            p_target = (1.0 - proba[:, self._noise_col]).tolist()
-            labels = proba.argmax(axis=1).tolist()
+        proba, p_target, labels = self._classify(rows, feats)
+        names = self._class_names
+        if self.tracks is not None:
+            views = self.tracks.update(prepared, proba.tolist())
+            return [
+                Detection(
+                    box_px=tuple(box), features=feats[j], cls=names[labels[j]], probabilities=proba[j],
+                    p_target=p_target[j], track_id=v.track_id, track_cls=v.cls, track_p_target=v.p_target,
+                    track_target=v.target, track_reason=v.reason, ground_x_m=v.ground_x_m,
+                    ground_y_m=v.ground_y_m, velocity_x_mps=v.velocity_x_mps,
+                    velocity_y_mps=v.velocity_y_mps, speed_mps=v.speed_mps,
+                )
+                for j, (box, v) in enumerate(zip(boxes, views, strict=True))
+            ]
         threshold = self.target_threshold
         ids = self.tracker.update_rows(boxes, [p >= threshold for p in p_target])
-        names = self._class_names
         return [
             Detection(
                 box_px=tuple(box),

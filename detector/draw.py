@@ -19,7 +19,9 @@ CLASS_COLOURS_BGR = {
 
 def draw_detections(image: np.ndarray, detections: Sequence, show_noise: bool = True,
                     boxes_px: Sequence[tuple[int, int, int, int]] | None = None) -> np.ndarray:
-    """A BGR copy of ``image`` (gray or BGR) with each detection's box and 'class p_target distance' label.
+    """A BGR copy of ``image`` (gray or BGR) with each detection's box and label: '#track class
+    p_target distance' with its track's class and pooled P(target) when it has a track, else its
+    own frame's 'class p_target distance'.
 
     ``boxes_px``: the boxes to draw, one per detection, when ``image`` is not the frame the
     detector saw (e.g. the source video, with ``detector.video.FrameScale.to_source_box``);
@@ -30,13 +32,18 @@ def draw_detections(image: np.ndarray, detections: Sequence, show_noise: bool = 
     size = max(1, round(img.shape[1] / 424))
     boxes = [det.box_px for det in detections] if boxes_px is None else boxes_px
     for det, box in zip(detections, boxes, strict=True):
-        if det.cls == "noise" and not show_noise:
+        tracked = det.track_cls is not None
+        cls = det.track_cls if tracked else det.cls
+        if cls == "noise" and not show_noise:
             continue
         x, y, w, h = (int(v) for v in box)
-        colour = CLASS_COLOURS_BGR.get(det.cls, (255, 255, 255))
-        thick = size if det.cls == "noise" else 2 * size
+        colour = CLASS_COLOURS_BGR.get(cls, (255, 255, 255))
+        thick = size if cls == "noise" else 2 * size
         cv2.rectangle(img, (x, y), (x + w - 1, y + h - 1), colour, thick)
-        label = f"{det.cls} {det.p_target:.2f} {det.features[3]:.0f}m"
+        if tracked:
+            label = f"#{det.track_id} {cls} {det.track_p_target:.2f} {det.features[3]:.0f}m"
+        else:
+            label = f"{det.cls} {det.p_target:.2f} {det.features[3]:.0f}m"
         cv2.putText(img, label, (x, max(8 * size, y - 3 * size)), cv2.FONT_HERSHEY_SIMPLEX, 0.3 * size, colour, size,
                     cv2.LINE_AA)
     return img

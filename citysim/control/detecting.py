@@ -1,15 +1,26 @@
-"""The paper's detector driving the lamps: per frame, confirmed k of n, and told to neighbours."""
+"""The paper's detector driving the lamps: per frame, confirmed k of n per track, and told to neighbours.
+
+The detector decides per track (``detector.tracks``): a detection is a target when its track
+is one (plausible, pooled P(target) >= threshold); ``Detector.is_target`` says so.
+``detector_confirmed`` and its heirs then ask k of the last n frames *of one track*
+(``TrackWindows``), so a flicker here and an insect there no longer add up to a confirmation;
+detections that carry no track (the paper's per-frame path) share one window, as before.
+"""
 
 from __future__ import annotations
 
 import math
-from collections import deque
 
 import numpy as np
 
 from citysim.config.kinds import AGENT_KINDS
 from citysim.control.base import Controller
 from citysim.control.camera import BackgroundClock, LightChangeWatch
+
+
+def _cls(d) -> str:
+    """A detection's class: its track's pooled one when it has a track, else its frame's."""
+    return d.track_cls if d.track_cls is not None else d.cls
 
 
 class DetectorPerFrame(Controller):
@@ -51,8 +62,32 @@ class DetectorPerFrame(Controller):
         return detections
 
 
+class TrackWindows:
+    """The last n target decisions of each track of one camera; a track is confirmed at k hits.
+
+    Keys are track ids (None: detections without a track, which share one window). A frame in
+    which a track is not seen counts as a miss; a window with no hit left is forgotten, so the
+    state stays as small as the tracks in view.
+    """
+
+    def __init__(self, k: int, n: int) -> None:
+        self.k, self.mask = k, (1 << n) - 1
+        self.bits: dict = {}
+
+    def update(self, hits: dict) -> set:
+        """Record one frame's ``{track key: target?}``; return the confirmed keys."""
+        mask = self.mask
+        bits = {key: b for key, b in ((key, (b << 1) & mask) for key, b in self.bits.items()) if b}
+        for key, hit in hits.items():
+            if hit:
+                bits[key] = bits.get(key, 0) | 1
+        self.bits = bits
+        k = self.k
+        return {key for key, b in bits.items() if b.bit_count() >= k}
+
+
 class DetectorConfirmed(DetectorPerFrame):
-    """k-of-n confirmation (the paper's eq. 12; its implementation switches on 2 of the last 6 frames)."""
+    """k-of-n confirmation per track (the paper's eq. 12; its implementation switches on 2 of the last 6 frames)."""
 
     name = "detector_confirmed"
 
@@ -61,12 +96,18 @@ class DetectorConfirmed(DetectorPerFrame):
         # the paper's implementation switches when 2 of the last 6 frames hold a target
         self.k = ctx.spec.k or 2
         self.n = ctx.spec.n or 6
-        self.history = [deque(maxlen=self.n) for _ in ctx.lamps]
+        self.windows = [TrackWindows(self.k, self.n) for _ in ctx.lamps]
+
+    def confirmed_tracks(self, lamp_index, detections) -> set:
+        """Record this frame's target decisions per track; the keys of the tracks now confirmed."""
+        det = self.detectors[lamp_index]
+        hits: dict = {}
+        for d in detections:
+            hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
+        return self.windows[lamp_index].update(hits)
 
     def confirmed(self, lamp_index, detections) -> bool:
-        hist = self.history[lamp_index]
-        hist.append(self.detectors[lamp_index].is_target(detections))
-        return sum(hist) >= self.k
+        return bool(self.confirmed_tracks(lamp_index, detections))
 
     def on_frame(self, lamp_index, t_s, image):
         detections = self.detect(lamp_index, t_s, image)
@@ -94,7 +135,9 @@ class DetectorNetwork(DetectorConfirmed):
         self.last_x_m: list[dict[int, tuple[float, float]]] = [{} for _ in ctx.lamps]
 
     def _direction(self, lamp_index, t_s, det) -> int:
-        """+1 / -1 along x from the track's ground positions, 0 when not yet known."""
+        """+1 / -1 along x from the track's ground velocity (or positions), 0 when not yet known."""
+        if det.velocity_x_mps is not None:
+            return 0 if abs(det.velocity_x_mps) < 0.3 else int(np.sign(det.velocity_x_mps))
         cam = self.ctx.street.lamps[lamp_index].camera
         x, y, w, h = det.box_px
         ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]]))[0]
@@ -110,26 +153,30 @@ class DetectorNetwork(DetectorConfirmed):
 
     def on_frame(self, lamp_index, t_s, image):
         detections = self.detect(lamp_index, t_s, image)
-        if detections is None or not self.confirmed(lamp_index, detections):
+        if detections is None:
+            return detections
+        confirmed = self.confirmed_tracks(lamp_index, detections)
+        if not confirmed:
             return detections
         self.bank.trigger(lamp_index, t_s)
-        targets = [d for d in detections if d.cls != "noise" and d.p_target >= self.detectors[lamp_index].target_threshold]
+        det = self.detectors[lamp_index]
+        targets = [d for d in detections if d.track_id in confirmed and d.cls != "noise" and det.is_target([d])]
         if not targets or t_s - self.last_sent_s[lamp_index] < self.repeat_s:
             if targets:
                 # keep tracking directions between notifications
                 for d in targets:
                     self._direction(lamp_index, t_s, d)
             return detections
-        best = max(targets, key=lambda d: self.lamps_ahead.get(d.cls, 1))
+        best = max(targets, key=lambda d: self.lamps_ahead.get(_cls(d), 1))
         direction = self._direction(lamp_index, t_s, best)
-        ahead = self.lamps_ahead.get(best.cls, 1)
+        ahead = self.lamps_ahead.get(_cls(best), 1)
         n = len(self.ctx.lamps)
         if direction == 0:
             receivers = [j for j in range(lamp_index - ahead, lamp_index + ahead + 1) if 0 <= j < n and j != lamp_index]
         else:
             receivers = [lamp_index + direction * k for k in range(1, ahead + 1) if 0 <= lamp_index + direction * k < n]
         if receivers:
-            self.ctx.network.send(lamp_index, receivers, "light", {"cls": best.cls})
+            self.ctx.network.send(lamp_index, receivers, "light", {"cls": _cls(best)})
             self.last_sent_s[lamp_index] = t_s
         return detections
 

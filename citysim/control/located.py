@@ -2,10 +2,12 @@
 
 A lamp camera sees 6-25 m ahead, which is mostly the next lamp's zone, so lighting only the
 camera's own lamp lights the wrong stretch. ``DetectorLocated`` takes each confirmed target
-track of the detector (k of its last n frames called a target: the tracker's own confirmation),
-puts its bottom-centre pixel on the ground through the camera model (``pixel_to_ground``: world
-x along the street, y across, m), estimates its velocity along the street from the last second
-of ground positions, and lights:
+track of the detector (a target track in k of its last n frames: ``TrackWindows``, as
+``detector_confirmed``), takes its ground position and velocity from the detector's track
+(``detector.tracks``: the bottom-centre pixel through the camera model, world x along the
+street, y across, m; velocity over the track's last half second; detections without a track
+are placed with ``pixel_to_ground`` and their velocity fitted over the last second here), and
+lights:
 
 * the lamp whose zone it stands in, and
 * every lamp whose zone it will enter within its lead time: the lamp's ramp, the radio's
@@ -18,7 +20,9 @@ lasts. Each lamp is released once nothing located is in or heading into its zone
 hold time. A track lost from view (it left the camera's 25 m, or walks under the pole where no
 camera looks) is extrapolated at its last velocity for a bounded distance and time, so the
 zones it walks into are lit before another camera picks it up. A track whose ground speed is
-beyond any road user's (an insect near the lens seen as far away and fast) is not a target.
+beyond any road user's (an insect near the lens seen as far away and fast) is not a target:
+the detector's tracks already reject those (``detector.tracks.plausibility``); the check here
+stays for detections without a track.
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ import numpy as np
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
-from citysim.control.detecting import DetectorPerFrame
+from citysim.control.detecting import DetectorPerFrame, TrackWindows
 from citysim.world.agents import AgentState
 
 #: Extra lead per detector class, s: beyond the ramp and the radio, for what the estimate misses.
@@ -62,8 +66,12 @@ class LocatedTrack:
     def last(self) -> tuple[float, float]:
         return self.seen[-1]
 
-    def observe(self, t_s: float, x_m: float) -> None:
+    def observe(self, t_s: float, x_m: float, vx_mps: float | None = None) -> None:
+        """One ground position along the street; ``vx_mps`` the detector's velocity when it has one."""
         self.seen.append((t_s, x_m))
+        if vx_mps is not None:
+            self.vx_mps = vx_mps
+            return
         recent = [(t, x) for t, x in self.seen if t >= t_s - VELOCITY_WINDOW_S]
         if len(recent) >= 3 and recent[-1][0] - recent[0][0] >= 0.3:
             ts, xs = np.array(recent).T
@@ -93,6 +101,7 @@ class DetectorLocated(DetectorPerFrame):
         self.tracks: dict[tuple[int, int], LocatedTrack] = {}
         self.told_s: dict[tuple[int, int], float] = {}  # (camera lamp, lamp told) -> last message time
         self.next_extrapolation_s = 0.0
+        self.windows = [TrackWindows(ctx.spec.k or 2, ctx.spec.n or 6) for _ in ctx.lamps]
 
     def lead_s(self, cls: str) -> float:
         return self.base_lead_s + CLASS_MARGIN_S.get(cls, 1.0)
@@ -128,22 +137,31 @@ class DetectorLocated(DetectorPerFrame):
         """Put camera ``lamp_index``'s confirmed target tracks on the street and light for them."""
         det = self.detectors[lamp_index]
         cam = det.camera
+        hits: dict = {}
         for d in detections:
-            if d.track_id is None or d.cls == "noise" or d.p_target < det.target_threshold:
+            hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
+        confirmed = self.windows[lamp_index].update(hits)
+        for d in detections:
+            if d.track_id is None or d.track_id not in confirmed or not det.is_target([d]):
                 continue
-            if not det.tracker.is_confirmed(d.track_id):
+            cls = d.track_cls if d.track_cls is not None else d.cls
+            if cls == "noise":
                 continue
-            x, y, w, h = d.box_px
-            ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]], dtype=np.float64))[0]
-            if not np.all(np.isfinite(ground)):
-                continue
+            if d.ground_x_m is not None:
+                ground_x_m = d.ground_x_m
+            else:
+                x, y, w, h = d.box_px
+                ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]], dtype=np.float64))[0]
+                if not np.all(np.isfinite(ground)):
+                    continue
+                ground_x_m = float(ground[0])
             key = (lamp_index, d.track_id)
-            track = self.tracks.setdefault(key, LocatedTrack(d.cls))
-            track.cls = d.cls
-            track.observe(t_s, float(ground[0]))
+            track = self.tracks.setdefault(key, LocatedTrack(cls))
+            track.cls = cls
+            track.observe(t_s, ground_x_m, d.velocity_x_mps)
             if track.vx_mps is not None and abs(track.vx_mps) > IMPLAUSIBLE_MPS:
                 continue  # nothing on the street moves like that: an insect at the lens, a flicker
-            self.light_zones(lamp_index, t_s, self.zones_for(float(ground[0]), track.vx_mps, track.cls))
+            self.light_zones(lamp_index, t_s, self.zones_for(ground_x_m, track.vx_mps, track.cls))
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)

@@ -36,10 +36,12 @@ from experiments.paper.metrics import (
     tpr_by_distance,
     window_detection,
 )
+from experiments.paper.notes import fmt
 from experiments.paper.plots import plot_confusions, plot_precision_recall
 from experiments.paper.report import write_markdown
 from experiments.paper.results import ConditionResult, Reproduction, SceneResult
 from experiments.paper.scenes import PAPER_SCENES, Budget, SceneRecords, film_scene, frames_to_film
+from experiments.paper.tracks import all_track_figures, per_region_object_figures
 
 RESULTS_DIR = Path(__file__).resolve().parents[1] / "results"
 FULL_BUDGET = Budget()
@@ -99,6 +101,7 @@ def evaluate(
         baseline={f: threshold_baseline(pooled, f) for f in BASELINE_FRACTIONS},
         window=window_detection(pooled, n=5),
         by_distance=tpr_by_distance(pooled),
+        tracks={"per frame": per_region_object_figures(pooled), **all_track_figures(pooled)},
     )
 
 
@@ -184,6 +187,10 @@ def main(argv: list[str] | None = None) -> int:
     n_obj, d_obj = night.confusions["objects"], day.confusions["objects"]
     print(f"night: FNR {1 - n_obj.tpr:.2f} (paper 0.24), FPR {n_obj.fpr:.2f} (paper 0.03); "
           f"day: TPR {d_obj.tpr:.2f} (paper 0.96), FPR {d_obj.fpr:.2f} (paper 0.05)")  # fmt: skip
+    run, frames = night.tracks["run"], night.tracks["per frame"]
+    print(f"night per object with tracks: miss {fmt(run.object_miss)} (per frame {fmt(frames.object_miss)}), "
+          f"noise tracks called target {fmt(run.track_fpr)} (per frame {fmt(frames.track_fpr)}), "
+          f"clean {fmt(run.clean_track_fpr)} (per frame {fmt(frames.clean_track_fpr)})")
     print(f"wrote {result.files['report']}")
     return 0
 

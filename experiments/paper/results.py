@@ -17,6 +17,7 @@ from experiments.paper.metrics import (
     WindowCheck,
 )
 from experiments.paper.scenes import Budget, SceneRecords
+from experiments.paper.tracks import TrackFigures
 
 
 @dataclass(frozen=True)
@@ -31,6 +32,9 @@ class ConditionResult:
     baseline: dict[float, BaselineRates]
     window: WindowCheck
     by_distance: list[BandRate]
+    #: per-object figures: each frame's own decision ('per frame'), the run's track decisions
+    #: ('run') and each pooling's (``experiments.paper.tracks``)
+    tracks: dict[str, TrackFigures]
 
 
 @dataclass(frozen=True)

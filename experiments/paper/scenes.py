@@ -151,6 +151,11 @@ class SceneRecords:
     frame_has_target: list[bool] = field(default_factory=list)
     frame_target_free: list[bool] = field(default_factory=list)
     hits: dict[tuple[str, int, int], list[tuple[int, bool]]] = field(default_factory=dict)
+    row_track: list[tuple[str, int, int] | None] = field(default_factory=list)
+    row_track_target: list[bool] = field(default_factory=list)
+    row_plausible: list[bool] = field(default_factory=list)
+    row_reason: list[str | None] = field(default_factory=list)
+    object_rows: dict[tuple[str, int, int], list[int]] = field(default_factory=dict)
     truth_instances: Counter = field(default_factory=Counter)
     frames: int = 0
     detector_cpu_s: float = 0.0
@@ -159,7 +164,10 @@ class SceneRecords:
 
     def extend(self, other: SceneRecords) -> SceneRecords:
         """Pool ``other`` into this one (returns self)."""
-        for name in ("truth_cls", "probabilities", "detected", "distance_m", "fragment", "target_area_frac", "noise_area_frac",
+        offset = len(self.truth_cls)
+        for key, rows in other.object_rows.items():
+            self.object_rows[key] = [r + offset if r >= 0 else -1 for r in rows]
+        for name in ("row_track", "row_track_target", "row_plausible", "row_reason", "truth_cls", "probabilities", "detected", "distance_m", "fragment", "target_area_frac", "noise_area_frac",
                      "frame_max_frac", "frame_has_target", "frame_target_free"):  # fmt: skip
             getattr(self, name).extend(getattr(other, name))
         self.hits.update(other.hits)
@@ -220,12 +228,22 @@ def score_frame(
         records.detected.append(True)
         records.distance_m.append(math.nan if r is None else truth[r].distance_m)
         records.fragment.append(r is None and _cover(d.box_px, target_boxes) >= FRAGMENT_COVER)
+        records.row_track.append(None if d.track_id is None else (*key, d.track_id))
+        records.row_track_target.append(bool(d.track_target))
+        records.row_plausible.append(d.track_reason in (None, "classified noise"))
+        records.row_reason.append(d.track_reason)
+    first_row = len(records.truth_cls) - len(detections)
     for r, t in enumerate(truth):
         if not eligible[r]:
             continue
         records.truth_instances[t.cls] += 1
         c = det_of_truth.get(r)
+        records.object_rows.setdefault((*key, t.object_id), []).append(-1 if c is None else first_row + c)
         if c is None:
+            records.row_track.append(None)
+            records.row_track_target.append(False)
+            records.row_plausible.append(False)
+            records.row_reason.append("not segmented")
             records.truth_cls.append(t.cls)
             records.probabilities.append(NOISE_ONE_HOT)
             records.detected.append(False)

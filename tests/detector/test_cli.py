@@ -83,6 +83,17 @@ def test_cli_detects_a_walker_at_its_distance_as_a_pedestrian(scene_b_files):
     assert classes.count("pedestrian") / len(classes) > 0.7, classes
     cap = cv2.VideoCapture(str(out / "annotated.mp4"))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 90
+    # one track for the one walker, a pedestrian crossing at 1.4 m/s 10 m ahead of the pole
+    tracked = [r for r in targets if r["track_cls"] == "pedestrian"]
+    assert len(tracked) >= 0.8 * len(targets) and len({r["track_id"] for r in tracked}) == 1
+    assert np.median([float(r["speed_mps"]) for r in tracked if r["speed_mps"]]) == pytest.approx(1.4, abs=0.2)
+    assert np.median([float(r["ground_x_m"]) for r in tracked]) == pytest.approx(FORWARD_M, rel=0.1)
+    tracks = read_rows(out / "tracks.csv")
+    walker = [t for t in tracks if t["cls"] == "pedestrian"]
+    assert len(walker) == 1 and walker[0]["reject_reason"] == ""
+    assert int(walker[0]["frames_seen"]) >= 0.8 * in_view
+    assert float(walker[0]["mean_speed_mps"]) == pytest.approx(1.4, abs=0.2)
+    assert all(t["reject_reason"] for t in tracks if t["cls"] == "noise")
 
 
 def run_cli(*args: str) -> subprocess.CompletedProcess:

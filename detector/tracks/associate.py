@@ -1,0 +1,97 @@
+"""Which region of this frame continues which track: gated, greedy, in the image and on the ground.
+
+Each track predicts its box (last box moved on by its image velocity) and its ground point
+(last position moved on by its ground velocity, ``detector.tracks.track``). A region may
+continue a track when it passes either gate:
+
+* image: IoU with the predicted box at least ``min_iou``, or centre within ``max_centre_diag``
+  predicted-box diagonals;
+* ground: bottom centre within ``gate_m`` of the predicted ground point, where the gate grows
+  with distance (``base_gate_m + gate_per_m * forward_m``: one pixel of the bottom row is
+  centimetres near the pole and half a metre at 20 m).
+
+Either gate suffices because each fails somewhere the other holds: the image gate loses a car
+at 15 m/s near the camera (it moves its own length in a few frames, but its ground prediction
+holds), the ground gate loses an insect whose bottom row jumps metres (which should still be
+one track, so its ground speed can condemn it). Pairs are scored ``IoU + image nearness +
+ground nearness`` (each nearness 1 at the prediction, 0 at the gate) and taken best first.
+
+Greedy rather than Hungarian (optimal) assignment: a lamp's frame holds a handful of regions
+and tracks, the gates leave few conflicts, and greedy in plain Python costs a few microseconds
+where scipy's ``linear_sum_assignment`` costs more in its call than the whole frame's matching;
+where two objects cross, the best pair is the prediction that fits best, which is what an
+optimal assignment of these scores would mostly choose too.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from detector.tracks.track import Track
+
+
+@dataclass(frozen=True)
+class Gates:
+    """Association gates (see the module docstring)."""
+
+    min_iou: float = 0.1
+    max_centre_diag: float = 1.0
+    base_gate_m: float = 1.0
+    gate_per_m: float = 0.1
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.min_iou <= 1.0:
+            raise ValueError(f"Gates.min_iou: must be in [0, 1], got {self.min_iou!r}")
+        for name in ("max_centre_diag", "base_gate_m", "gate_per_m"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"Gates.{name}: must be >= 0, got {getattr(self, name)!r}")
+
+
+def pair_scores(
+    tracks: Sequence[Track], boxes_px: Sequence[Sequence[float]], grounds: Sequence, frame: int, gates: Gates
+) -> list[tuple[float, int, int]]:
+    """Allowed (score, track index, region index) pairs."""
+    max_d = max(gates.max_centre_diag, 1e-9)
+    extents = [(bx, by, bx + bw, by + bh, bw * bh, bx + bw / 2, by + bh / 2) for bx, by, bw, bh in boxes_px]
+    pairs = []
+    for ti, track in enumerate(tracks):
+        px, py, pw, ph = track.predicted_box()
+        p_right, p_bottom, p_area = px + pw, py + ph, pw * ph
+        pcx, pcy = px + pw / 2, py + ph / 2
+        diag = max(math.hypot(pw, ph), 1.0)
+        pf, pr = track.predicted_ground(frame)
+        gate_m = gates.base_gate_m + gates.gate_per_m * abs(pf)
+        for ri, (bx, by, b_right, b_bottom, b_area, bcx, bcy) in enumerate(extents):
+            dist = math.hypot(pcx - bcx, pcy - bcy) / diag
+            iw = min(p_right, b_right) - max(px, bx)
+            ih = min(p_bottom, b_bottom) - max(py, by)
+            inter = iw * ih if iw > 0 and ih > 0 else 0.0
+            union = p_area + b_area - inter
+            iou = inter / union if union > 0 else 0.0
+            ground = grounds[ri]
+            ground_d = math.hypot(ground[0] - pf, ground[1] - pr) if ground is not None else math.inf
+            if iou < gates.min_iou and dist > gates.max_centre_diag and ground_d > gate_m:
+                continue
+            near_img = 1.0 - dist / max_d
+            near_ground = 1.0 - ground_d / gate_m if gate_m > 0 else 0.0
+            pairs.append((iou + max(near_img, 0.0) + max(near_ground, 0.0), ti, ri))
+    return pairs
+
+
+def associate(
+    tracks: Sequence[Track], boxes_px: Sequence[Sequence[float]], grounds: Sequence, frame: int, gates: Gates
+) -> list[int]:
+    """Each region's track index (-1: none), greedy on ``pair_scores``, best pair first."""
+    track_of = [-1] * len(boxes_px)
+    if not tracks or not boxes_px:
+        return track_of
+    pairs = pair_scores(tracks, boxes_px, grounds, frame, gates)
+    pairs.sort(key=lambda pair: -pair[0])  # stable: ties keep track-major order
+    taken = set()
+    for _, ti, ri in pairs:
+        if ti not in taken and track_of[ri] < 0:
+            track_of[ri] = ti
+            taken.add(ti)
+    return track_of

@@ -1,0 +1,125 @@
+"""One object in pieces becomes one region again, before it is classified.
+
+Background subtraction often cuts an object: a car's dark windows split its body, a walker's
+coat matches the wall behind. Each piece then has a piece's size and is called noise or the
+wrong class. Two rules join pieces (the paper's section 8 names the problem):
+
+* **inside a track's box**: a region that continues no track but lies mostly
+  (``min_inside_share`` of its box) inside the predicted box of a track that another region
+  of this frame continues is a piece of that object;
+* **moving together**: two regions continuing tracks seen for ``min_frames`` frames or more,
+  whose boxes touch or nearly (gaps under ``max_gap_share`` of the smaller height), whose image
+  velocities agree (within ``max_velocity_share`` of the faster plus ``velocity_slack_px``
+  per frame), and whose union fits a Table 1 class at least as well as each part does
+  (``detector.tracks.plausibility.table1_misfit``, in metres through the camera), are one
+  object; the younger track joins the older.
+
+The union's box is the boxes' union and its contour area the parts' sum; its features are
+computed again (``detector.features``). Pairs are few (a frame holds a handful of regions),
+so the tests run in plain Python over all pairs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from detector.tracks.plausibility import table1_misfit
+from detector.tracks.track import Track
+
+
+@dataclass(frozen=True)
+class ReuniteParams:
+    """Thresholds of the two rules (see the module docstring)."""
+
+    min_inside_share: float = 0.5
+    min_frames: int = 3
+    max_gap_share: float = 0.5
+    max_velocity_share: float = 0.3
+    velocity_slack_px: float = 0.5
+
+
+def _inside_share(box, other) -> float:
+    """Share of ``box``'s area that ``other`` covers (boxes x, y, w, h px)."""
+    x, y, w, h = box
+    ox, oy, ow, oh = other
+    iw = min(x + w, ox + ow) - max(x, ox)
+    ih = min(y + h, oy + oh) - max(y, oy)
+    return iw * ih / max(w * h, 1) if iw > 0 and ih > 0 else 0.0
+
+
+def _near(a, b, share: float) -> bool:
+    ax, ay, aw, ah = a
+    bx, by, bw, bh = b
+    gap_x = max(ax, bx) - min(ax + aw, bx + bw)
+    gap_y = max(ay, by) - min(ay + ah, by + bh)
+    limit = share * min(ah, bh)
+    return gap_x <= limit and gap_y <= limit
+
+
+def _same_motion(a: Track, b: Track, params: ReuniteParams) -> bool:
+    (ax, ay), (bx, by) = a.image_velocity_px, b.image_velocity_px
+    faster = max(math.hypot(ax, ay), math.hypot(bx, by))
+    return math.hypot(ax - bx, ay - by) <= params.max_velocity_share * faster + params.velocity_slack_px
+
+
+def union_box(boxes: Sequence[Sequence[float]]) -> list[int]:
+    left = min(b[0] for b in boxes)
+    top = min(b[1] for b in boxes)
+    right = max(b[0] + b[2] for b in boxes)
+    bottom = max(b[1] + b[3] for b in boxes)
+    return [left, top, right - left, bottom - top]
+
+
+def fragment_groups(
+    tracks: Sequence[Track],
+    boxes_px: Sequence[Sequence[float]],
+    rows: Sequence[Sequence[float]],
+    track_of: Sequence[int],
+    union_row,
+    params: ReuniteParams,
+) -> list[list[int]]:
+    """Groups (two or more region indices, the first the one whose track is kept) to join.
+
+    ``union_row(indices)`` gives the feature row of the union of those regions.
+    """
+    n = len(boxes_px)
+    parent = list(range(n))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    region_of_track = {t: i for i, t in enumerate(track_of) if t >= 0}
+    # rule 1: an unmatched region inside the predicted box of a track another region continues
+    for j in range(n):
+        if track_of[j] >= 0:
+            continue
+        for t, i in region_of_track.items():
+            if _inside_share(boxes_px[j], tracks[t].predicted_box()) >= params.min_inside_share:
+                parent[root(j)] = root(i)
+                break
+    # rule 2: established tracks moving together whose union fits Table 1 at least as well
+    established = [i for i in range(n) if track_of[i] >= 0 and tracks[track_of[i]].sightings >= params.min_frames]
+    for a, i in enumerate(established):
+        for j in established[a + 1 :]:
+            if root(i) == root(j) or not _near(boxes_px[i], boxes_px[j], params.max_gap_share):
+                continue
+            if not _same_motion(tracks[track_of[i]], tracks[track_of[j]], params):
+                continue
+            parts = min(table1_misfit(rows[i][0], rows[i][1]), table1_misfit(rows[j][0], rows[j][1]))
+            union = union_row([i, j])
+            if union is not None and table1_misfit(union[0], union[1]) <= parts:
+                parent[root(j)] = root(i)
+    groups: dict[int, list[int]] = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+
+    def age(i: int) -> tuple:
+        t = track_of[i]
+        return (t < 0, -tracks[t].sightings if t >= 0 else 0, i)
+
+    return [sorted(g, key=age) for g in groups.values() if len(g) > 1]

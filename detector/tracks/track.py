@@ -1,0 +1,221 @@
+"""One object followed across frames: where it is on the ground, how fast, how big, what it is.
+
+A ``Track`` keeps short windows of its history (positions, sizes, per-frame class
+probabilities) so every figure it reports costs O(window) per frame, not O(life).
+
+Ground positions are in the camera's ground frame (``detector.tracks.ground``: forward and
+right of the pole foot, m). Velocities are differences over ``VELOCITY_WINDOW_S`` of positions
+(a single frame's bottom row jitters by a pixel or more: 0.5 m at 20 m, 7 m/s at 15 frames/s;
+over half a second the same jitter is 1 m/s). Image velocities are px per frame of the box
+centre, for predicting the next box.
+
+Pooling the per-frame class probabilities (``POOLINGS``) into P(target): ``mean_log`` (the
+default) averages the log-probabilities of the last ``POOL_FRAMES`` frames and renormalises:
+the frames as independent evidence about one object, tempered by their number so a long track
+is not certain; ``mean`` averages the probabilities; ``last`` is the newest frame alone. The
+choice was measured on the paper's scene replicas (``experiments.paper``; figures in README).
+Which target class a track is takes its whole life (``log_sums``: the summed log-probabilities
+of every frame): a walker whose silhouette looks like a cyclist's now and then stays a
+pedestrian, while P(target) answers within a second.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+#: Frames whose class probabilities are pooled into the track's class.
+POOL_FRAMES = 15
+#: Positions spanning about this long give a track's ground velocity, s.
+VELOCITY_WINDOW_S = 0.5
+#: Frames of size history kept for the steadiness test.
+SIZE_FRAMES = 15
+#: Frames over which acceleration violations are counted.
+ACCEL_FRAMES = 15
+#: Frames of image-centre history kept for the oscillation test.
+SWAY_FRAMES = 30
+#: Probabilities are floored here before the logarithm (a 0 would veto a class for good).
+_P_FLOOR = 1e-4
+POOLINGS = ("mean_log", "mean", "last")
+
+
+def pool_probabilities(frames: deque | list, pooling: str = "mean_log") -> list[float]:
+    """The pooled class probabilities of per-frame probability rows (newest last)."""
+    if pooling == "last":
+        return list(frames[-1])
+    n = len(frames)
+    k = len(frames[0])
+    if pooling == "mean":
+        return [sum(p[c] for p in frames) / n for c in range(k)]
+    if pooling != "mean_log":
+        raise ValueError(f"pooling: must be one of {POOLINGS}, got {pooling!r}")
+    logs = [sum(math.log(p[c] if p[c] > _P_FLOOR else _P_FLOOR) for p in frames) / n for c in range(k)]
+    top = max(logs)
+    exp = [math.exp(v - top) for v in logs]
+    total = sum(exp)
+    return [e / total for e in exp]
+
+
+@dataclass(slots=True)
+class Track:
+    """The state of one track; ``TrackSet`` updates it, everyone else reads it."""
+
+    track_id: int
+    first_frame: int
+    fps: float
+    box_px: list[float]
+    forward_m: float
+    right_m: float
+    last_frame: int = 0
+    sightings: int = 1
+    missed: int = 0
+    image_velocity_px: tuple[float, float] = (0.0, 0.0)  # box centre, px per frame
+    velocity_mps: tuple[float, float] | None = None  # (forward, right), m/s; None until known
+    #: (frame, forward_m, right_m), the last ``VELOCITY_WINDOW_S`` and a bit
+    positions: deque = field(default_factory=deque)
+    #: (frame, forward_mps, right_mps): velocities, for the acceleration test
+    velocities: deque = field(default_factory=deque)
+    widths_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
+    heights_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
+    centres_x_px: deque = field(default_factory=lambda: deque(maxlen=SWAY_FRAMES))
+    probabilities: deque = field(default_factory=lambda: deque(maxlen=POOL_FRAMES))
+    pooled: list[float] = field(default_factory=list)
+    #: summed log-probabilities per class over every frame of the track (its class)
+    log_sums: list[float] = field(default_factory=list)
+    #: per-frame log-probabilities of the pooling window and their running sum (``mean_log``)
+    window_logs: deque = field(default_factory=lambda: deque(maxlen=POOL_FRAMES))
+    window_log_sums: list[float] = field(default_factory=list)
+    #: frames (within the acceleration window) whose acceleration exceeded the bound
+    accel_violations: deque = field(default_factory=lambda: deque(maxlen=ACCEL_FRAMES))
+    #: the last n target decisions as bits, newest in bit 0 (k-of-n confirmation)
+    hit_bits: int = 0
+    target: bool = False
+    reason: str | None = "too few frames"
+    cls: str = "noise"
+    p_target: float = 0.0
+    speed_sum_mps: float = 0.0
+    speed_frames: int = 0
+    target_frames: int = 0
+    #: frames per target class while the track was a target; frames per reason while it was not
+    target_classes: dict = field(default_factory=dict)
+    reasons: dict = field(default_factory=dict)
+    merged_into: int | None = None
+    #: the last frame the track's ground speed was under the still limit (None: never)
+    still_frame: int | None = None
+
+    @property
+    def speed_mps(self) -> float | None:
+        if self.velocity_mps is None:
+            return None
+        return math.hypot(*self.velocity_mps)
+
+    @property
+    def mean_speed_mps(self) -> float | None:
+        return self.speed_sum_mps / self.speed_frames if self.speed_frames else None
+
+    def predicted_box(self) -> tuple[float, float, float, float]:
+        """The box moved on by its image velocity over the frames since it was last seen."""
+        x, y, w, h = self.box_px
+        vx, vy = self.image_velocity_px
+        steps = self.missed + 1
+        return (x + vx * steps, y + vy * steps, w, h)
+
+    def predicted_ground(self, frame: int) -> tuple[float, float]:
+        """(forward_m, right_m) at ``frame`` at the track's ground velocity (its last position if unknown)."""
+        if self.velocity_mps is None:
+            return self.forward_m, self.right_m
+        dt_s = (frame - self.last_frame) / self.fps
+        return self.forward_m + self.velocity_mps[0] * dt_s, self.right_m + self.velocity_mps[1] * dt_s
+
+    def observe(self, frame: int, box_px, ground, features, probabilities, smoothing: float = 0.5) -> None:
+        """One frame's region: box, (forward_m, right_m), feature row and class probabilities."""
+        x, y, w, h = box_px
+        ox, oy, ow, oh = self.box_px
+        steps = max(frame - self.last_frame, 1)
+        sx = ((x + w / 2) - (ox + ow / 2)) / steps
+        sy = ((y + h / 2) - (oy + oh / 2)) / steps
+        if self.sightings == 1:
+            self.image_velocity_px = (sx, sy)
+        else:
+            vx, vy = self.image_velocity_px
+            self.image_velocity_px = (smoothing * sx + (1 - smoothing) * vx, smoothing * sy + (1 - smoothing) * vy)
+        self.box_px = list(box_px)
+        self.sightings += 1
+        self.missed = 0
+        self.last_frame = frame
+        self.forward_m, self.right_m = ground
+        self._update_velocity(frame)
+        self.widths_m.append(features[0])
+        self.heights_m.append(features[1])
+        self.centres_x_px.append(x + w / 2)
+        self._add_probabilities(probabilities)
+
+    def _add_probabilities(self, probabilities) -> None:
+        self.probabilities.append(probabilities)
+        logs = [math.log(p if p > _P_FLOOR else _P_FLOOR) for p in probabilities]
+        if not self.log_sums:
+            self.log_sums, self.window_log_sums = list(logs), list(logs)
+            self.window_logs.append(logs)
+            return
+        self.log_sums = [a + b for a, b in zip(self.log_sums, logs, strict=True)]
+        sums = self.window_log_sums
+        if len(self.window_logs) == self.window_logs.maxlen:  # the oldest frame leaves the window
+            sums = [a - b for a, b in zip(sums, self.window_logs[0], strict=True)]
+        self.window_logs.append(logs)
+        self.window_log_sums = [a + b for a, b in zip(sums, logs, strict=True)]
+
+    def pooled_probabilities(self, pooling: str = "mean_log") -> list[float]:
+        """``pool_probabilities`` of the window; ``mean_log`` from the running sums (O(classes))."""
+        if pooling != "mean_log":
+            return pool_probabilities(self.probabilities, pooling)
+        n = len(self.window_logs)
+        means = [v / n for v in self.window_log_sums]
+        top = max(means)
+        exp = [math.exp(v - top) for v in means]
+        total = sum(exp)
+        return [e / total for e in exp]
+
+    def start(self, box_px, ground, features, probabilities) -> None:
+        """The first frame's region (the fields the constructor did not set)."""
+        x, _, w, _ = box_px
+        self.last_frame = self.first_frame
+        self.positions.append((self.first_frame, *ground))
+        self.widths_m.append(features[0])
+        self.heights_m.append(features[1])
+        self.centres_x_px.append(x + w / 2)
+        self._add_probabilities(probabilities)
+
+    def _update_velocity(self, frame: int) -> None:
+        positions = self.positions
+        positions.append((frame, self.forward_m, self.right_m))
+        window = VELOCITY_WINDOW_S * self.fps
+        while len(positions) > 2 and frame - positions[1][0] >= window:
+            positions.popleft()
+        f0, a0, b0 = positions[0]
+        if frame - f0 < self._min_span_frames():  # a frame or two of jitter is no velocity
+            return
+        dt_s = (frame - f0) / self.fps
+        self.velocity_mps = ((self.forward_m - a0) / dt_s, (self.right_m - b0) / dt_s)
+        velocities = self.velocities
+        velocities.append((frame, *self.velocity_mps))
+        while len(velocities) > 2 and frame - velocities[1][0] >= window:
+            velocities.popleft()
+        speed = math.hypot(*self.velocity_mps)
+        self.speed_sum_mps += speed
+        self.speed_frames += 1
+
+    def _min_span_frames(self) -> float:
+        """Frames a difference must span: half the velocity window, at least 2."""
+        return max(2.0, VELOCITY_WINDOW_S * self.fps / 2)
+
+    def acceleration_mps2(self) -> float | None:
+        """Change of the ground velocity over the last velocity window, m/s^2 (None until known)."""
+        velocities = self.velocities
+        if len(velocities) < 2:
+            return None
+        f0, a0, b0 = velocities[0]
+        f1, a1, b1 = velocities[-1]
+        if f1 - f0 < self._min_span_frames():
+            return None
+        return math.hypot(a1 - a0, b1 - b0) * self.fps / (f1 - f0)

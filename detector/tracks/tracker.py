@@ -1,0 +1,263 @@
+"""A camera's tracks: each frame's regions associated, fragments joined, classes pooled, physics checked.
+
+``TrackSet`` is what ``detector.detector.Detector`` calls per frame, in two steps around the
+classifier:
+
+1. ``prepare(boxes, areas, rows)``: ground points of the regions (``ground``), their
+   association with the tracks (``associate``) and the joining of fragments (``reunite``);
+   returns the regions to classify (joined ones with recomputed features);
+2. ``update(prepared, probabilities)``: every track continued or started, its pooled class
+   and p_target (``track.pool_probabilities``), its plausibility (``plausibility``) and its
+   target decision: a target track is plausible and its pooled p_target reaches the
+   threshold. Returns one ``TrackView`` per region.
+
+Tracks unseen for more than ``max_missed_frames`` frames end, except a target that had
+stopped (ground speed under the plausibility limits' ``still_mps``): background subtraction
+absorbs a still object in a few seconds (MOG2 takes a new colour as background once it holds
+a tenth of its weight: about 3.5 s at the default history), so such a track is kept for
+``still_hold_s`` and the person who stood and walks on keeps the id. With ``keep_ended`` they are
+kept in ``ended`` (for a video's tracks.csv; a simulation leaves it off so memory stays
+bounded). Track ids are ints from 1, never reused. The last ``confirm_n`` target decisions of
+each track are kept as bits for k-of-n confirmation (``is_confirmed``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from detector.camera import CameraModel
+from detector.features import RegionGeometry
+from detector.tracks.associate import Gates, associate
+from detector.tracks.ground import GroundProjector
+from detector.tracks.plausibility import PlausibilityLimits, note_acceleration, reject_reason
+from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
+from detector.tracks.track import POOLINGS, Track
+
+_DEFAULT_LIMITS = PlausibilityLimits()
+_DEFAULT_GATES = Gates()
+_DEFAULT_REUNITE = ReuniteParams()
+
+
+@dataclass(frozen=True, slots=True)
+class TrackView:
+    """What a region's track says about it this frame (world ground frame, m and m/s)."""
+
+    track_id: int
+    cls: str
+    p_target: float
+    target: bool
+    reason: str | None  # why it is not a target (None: it is one)
+    ground_x_m: float
+    ground_y_m: float
+    velocity_x_mps: float | None
+    velocity_y_mps: float | None
+    speed_mps: float | None
+
+
+@dataclass
+class Prepared:
+    """A frame's regions after association and reunification, ready to classify."""
+
+    boxes_px: list
+    areas_px: list
+    rows: list
+    grounds: list
+    track_of: list[int]  # track index per region, -1 for a new track
+    absorbed: list[tuple[int, int]]  # (track index, region it joined) for tracks joined into another
+
+
+class TrackSet:
+    """The tracks of one camera (see the module docstring)."""
+
+    def __init__(
+        self,
+        camera: CameraModel,
+        class_names: Sequence[str],
+        target_threshold: float = 0.5,
+        *,
+        geometry: RegionGeometry | None = None,
+        limits: PlausibilityLimits = _DEFAULT_LIMITS,
+        gates: Gates = _DEFAULT_GATES,
+        reunite: ReuniteParams | None = _DEFAULT_REUNITE,
+        pooling: str = "mean_log",
+        max_missed_frames: int = 5,
+        still_hold_s: float = 10.0,
+        confirm_k: int = 2,
+        confirm_n: int = 6,
+        keep_ended: bool = False,
+    ) -> None:
+        if pooling not in POOLINGS:
+            raise ValueError(f"TrackSet pooling: must be one of {POOLINGS}, got {pooling!r}")
+        if "noise" not in class_names:
+            raise ValueError(f"TrackSet class_names: must include 'noise', got {list(class_names)}")
+        if not 1 <= confirm_k <= confirm_n:
+            raise ValueError(f"TrackSet: need 1 <= confirm_k <= confirm_n, got k={confirm_k}, n={confirm_n}")
+        self.fps = camera.fps
+        self.geometry = RegionGeometry(camera) if geometry is None else geometry
+        self.ground = GroundProjector(camera, self.geometry)
+        self.class_names = list(class_names)
+        self.noise_col = self.class_names.index("noise")
+        self.target_threshold = float(target_threshold)
+        self.limits, self.gates, self.reunite, self.pooling = limits, gates, reunite, pooling
+        self.max_missed_frames = int(max_missed_frames)
+        self.still_hold_frames = round(still_hold_s * camera.fps)
+        self.confirm_k, self.confirm_n = int(confirm_k), int(confirm_n)
+        self._mask = (1 << self.confirm_n) - 1
+        self.keep_ended = keep_ended
+        self.tracks: list[Track] = []
+        self.ended: list[Track] = []
+        self.frame = -1
+        self._next_id = 1
+
+    def __len__(self) -> int:
+        return len(self.tracks)
+
+    def reset(self) -> None:
+        """Forget every track (ids keep counting up)."""
+        for track in self.tracks:
+            self._end(track)
+        self.tracks = []
+
+    def is_confirmed(self, track_id: int) -> bool:
+        """Whether the track was a target in at least k of its last n frames."""
+        return any(t.track_id == track_id and t.hit_bits.bit_count() >= self.confirm_k for t in self.tracks)
+
+    # ------------------------------------------------------------------ step 1
+    def prepare(self, boxes_px: list, areas_px: list, rows: list) -> Prepared:
+        """Associate this frame's regions (feature rows all with a ground point) and join fragments."""
+        self.frame += 1
+        grounds = self.ground.bottom_centres(boxes_px)
+        track_of = associate(self.tracks, boxes_px, grounds, self.frame, self.gates)
+        prepared = Prepared(boxes_px, areas_px, rows, grounds, track_of, [])
+        if self.reunite is not None and len(boxes_px) > 1:
+            self._join(prepared)
+        return prepared
+
+    def _join(self, p: Prepared) -> None:
+        geometry = self.geometry
+
+        def union_row(indices):
+            box = union_box([p.boxes_px[i] for i in indices])
+            return geometry.rows([box], [sum(p.areas_px[i] for i in indices)])[0]
+
+        groups = fragment_groups(self.tracks, p.boxes_px, p.rows, p.track_of, union_row, self.reunite)
+        if not groups:
+            return
+        drop = set()
+        for group in groups:
+            keep = group[0]
+            box = union_box([p.boxes_px[i] for i in group])
+            area = sum(p.areas_px[i] for i in group)
+            row = geometry.rows([box], [area])[0]
+            ground = self.ground.bottom_centres([box])[0]
+            if row is None or ground is None:
+                continue
+            p.boxes_px[keep], p.areas_px[keep], p.rows[keep], p.grounds[keep] = box, area, row, ground
+            for i in group[1:]:
+                drop.add(i)
+                if p.track_of[i] >= 0 and p.track_of[i] != p.track_of[keep]:
+                    p.absorbed.append((p.track_of[i], keep))
+            if p.track_of[keep] < 0:  # a group of new regions: the first's place in the order
+                p.track_of[keep] = next((p.track_of[i] for i in group if p.track_of[i] >= 0), -1)
+        kept = [i for i in range(len(p.boxes_px)) if i not in drop]
+        new_index = {i: k for k, i in enumerate(kept)}
+        p.absorbed = [(t, new_index[keep]) for t, keep in p.absorbed]
+        for name in ("boxes_px", "areas_px", "rows", "grounds", "track_of"):
+            values = getattr(p, name)
+            setattr(p, name, [values[i] for i in kept])
+
+    # ------------------------------------------------------------------ step 2
+    def update(self, p: Prepared, probabilities: list[list[float]]) -> list[TrackView]:
+        """Continue or start each region's track with its class probabilities; one view per region."""
+        frame, tracks = self.frame, self.tracks
+        seen = set()
+        views_tracks: list[Track] = []
+        for i, t in enumerate(p.track_of):
+            row, proba = p.rows[i], probabilities[i]
+            if t >= 0:
+                track = tracks[t]
+                track.observe(frame, p.boxes_px[i], p.grounds[i], row, proba)
+                seen.add(t)
+            else:
+                track = Track(self._next_id, frame, self.fps, list(p.boxes_px[i]), *p.grounds[i])
+                self._next_id += 1
+                track.start(p.boxes_px[i], p.grounds[i], row, proba)
+                tracks.append(track)
+                seen.add(len(tracks) - 1)
+            self._judge(track)
+            views_tracks.append(track)
+        absorbed = {t: views_tracks[i].track_id for t, i in p.absorbed}
+        survivors = []
+        for t, track in enumerate(tracks):
+            if t not in seen:
+                track.missed += 1
+                track.hit_bits = (track.hit_bits << 1) & self._mask
+            if t in absorbed and t not in seen:
+                track.merged_into = absorbed[t]
+                self._end(track)
+            elif track.missed > self._missed_limit(track):
+                self._end(track)
+            else:
+                survivors.append(track)
+        self.tracks = survivors
+        return [self._view(track) for track in views_tracks]
+
+    def age(self) -> None:
+        """A frame with no region to classify: every track missed."""
+        self.frame += 1
+        if not self.tracks:
+            return
+        mask = self._mask
+        survivors = []
+        for track in self.tracks:
+            track.missed += 1
+            track.hit_bits = (track.hit_bits << 1) & mask
+            if track.missed > self._missed_limit(track):
+                self._end(track)
+            else:
+                survivors.append(track)
+        self.tracks = survivors
+
+    def _missed_limit(self, track: Track) -> int:
+        """Frames a track may go unseen: longer for a target that stood still (see the module docstring)."""
+        # the fading region of an absorbed still body moves its box: "stood" means within a second
+        if track.target_frames and track.still_frame is not None and track.last_frame - track.still_frame <= self.fps:
+            return self.still_hold_frames
+        return self.max_missed_frames
+
+    def _judge(self, track: Track) -> None:
+        note_acceleration(track, self.limits)
+        speed = track.speed_mps
+        if speed is not None and speed < self.limits.still_mps:
+            track.still_frame = track.last_frame
+        track.pooled = pooled = track.pooled_probabilities(self.pooling)
+        track.p_target = 1.0 - pooled[self.noise_col]
+        noise, sums = self.noise_col, track.log_sums
+        best = max((c for c in range(len(sums)) if c != noise), key=sums.__getitem__)
+        track.cls = self.class_names[best]  # the likeliest target class over its life
+        reason = reject_reason(track, self.limits)
+        if reason is None and track.p_target < self.target_threshold:
+            reason = "classified noise"
+        track.reason = reason
+        track.target = reason is None
+        track.hit_bits = ((track.hit_bits << 1) | track.target) & self._mask
+        if track.target:
+            track.target_frames += 1
+            track.target_classes[track.cls] = track.target_classes.get(track.cls, 0) + 1
+        else:
+            track.reasons[reason] = track.reasons.get(reason, 0) + 1
+
+    def _view(self, track: Track) -> TrackView:
+        x_m, y_m = self.ground.to_world(track.forward_m, track.right_m)
+        if track.velocity_mps is None:
+            vx = vy = speed = None
+        else:
+            vx, vy = self.ground.velocity_to_world(*track.velocity_mps)
+            speed = track.speed_mps
+        cls = track.cls if track.target else "noise"
+        return TrackView(track.track_id, cls, track.p_target, track.target, track.reason, x_m, y_m, vx, vy, speed)
+
+    def _end(self, track: Track) -> None:
+        if self.keep_ended:
+            self.ended.append(track)
