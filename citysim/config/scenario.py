@@ -129,6 +129,10 @@ class ControllerSpec(Spec):
         default=None, ge=0, le=1, description="detector: P(target) to light"
     )
     k: int | None = Field(default=None, ge=1, le=100, description="k-of-n confirmation (eq. 12)")
+    tracking: bool | None = Field(
+        default=None, description="camera controllers: decide per track of the detector (true) or per frame "
+        "(false); default: the controller's own (detector_tracked and detector_located track)",
+    )
     n: int | None = Field(default=None, ge=1, le=100)
     hold_s: float | None = Field(
         default=None, ge=0, le=3600, description="overrides lamps.luminaire.hold_s"

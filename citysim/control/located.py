@@ -86,6 +86,7 @@ class DetectorLocated(DetectorPerFrame):
     """The detector's confirmed tracks placed on the street; their zones and the zones ahead lit."""
 
     name = "detector_located"
+    tracking = True  # it places the detector's tracks on the street
 
     def __init__(self, ctx: ControlContext):
         super().__init__(ctx)

@@ -8,7 +8,12 @@ from __future__ import annotations
 from citysim.control.base import Controller
 from citysim.control.camera import Threshold05, Threshold5
 from citysim.control.clock import AlwaysOn, Schedule
-from citysim.control.detecting import DetectorConfirmed, DetectorNetwork, DetectorPerFrame
+from citysim.control.detecting import (
+    DetectorConfirmed,
+    DetectorNetwork,
+    DetectorPerFrame,
+    DetectorTracked,
+)
 from citysim.control.located import DetectorLocated
 from citysim.control.oracle import Oracle
 from citysim.control.pir import PassiveInfrared
@@ -17,6 +22,6 @@ CONTROLLERS: dict[str, type[Controller]] = {
     cls.name: cls
     for cls in (
         AlwaysOn, Oracle, Schedule, PassiveInfrared, Threshold5, Threshold05,
-        DetectorPerFrame, DetectorConfirmed, DetectorNetwork, DetectorLocated,
+        DetectorPerFrame, DetectorConfirmed, DetectorTracked, DetectorNetwork, DetectorLocated,
     )
 }  # fmt: skip
