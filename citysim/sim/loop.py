@@ -45,8 +45,18 @@ SUMMARY_KEYS = (
 )  # fmt: skip
 
 
+#: How a camera is simulated: "full" renders frames for the real detector; "fast" draws what it
+#: would report from a calibrated sensor model (``citysim.fast``), with no rendering.
+FIDELITIES = ("full", "fast")
+
+
 class RunError(ValueError):
     """A run that cannot start (e.g. an unknown controller); the message names the field."""
+
+
+def check_fidelity(fidelity: str) -> None:
+    if fidelity not in FIDELITIES:
+        raise RunError(f"fidelity: unknown {fidelity!r}; valid: {', '.join(FIDELITIES)}")
 
 
 def controller_spec(scenario: Scenario, name: str) -> ControllerSpec:
@@ -63,7 +73,7 @@ def check_controllers(names: list[str]) -> None:
         raise RunError(f"controllers: unknown {', '.join(map(repr, unknown))}; valid: {', '.join(CONTROLLERS)}")
 
 
-def build_controller(night: Night, spec: ControllerSpec) -> Controller:
+def build_controller(night: Night, spec: ControllerSpec, sensors: object | None = None) -> Controller:
     """The controller of ``spec`` with its lamps (at their initial level) and radio network."""
     scenario = night.scenario
     controller_cls = CONTROLLERS[spec.name]
@@ -75,7 +85,7 @@ def build_controller(night: Night, spec: ControllerSpec) -> Controller:
     network = Network(night.env, len(lamps), scenario.network, night.streams["network"])
     ctx = ControlContext(street=night.street, lamps=lamps, luminaire=lum,
                          frame_period_s=1.0 / night.street.lamps[0].camera.fps, rng=night.streams["control"],
-                         network=network, start_hour=scenario.start_hour, spec=spec)  # fmt: skip
+                         network=network, start_hour=scenario.start_hour, spec=spec, sensors=sensors)  # fmt: skip
     return controller_cls(ctx)
 
 
@@ -111,11 +121,27 @@ def run_controller(
     lamps_writer: csv.writer | None = None,
     objects_writer: csv.writer | None = None,
     on_progress: Callable[[float], None] | None = None,
+    fidelity: str = "full",
+    sensor_model=None,
+    sensors: object | None = None,
+    observers: Sequence[Collector] = (),
 ) -> dict:
-    """Simulate the scenario's night under one controller; returns its summary (summary.json entry)."""
+    """Simulate the scenario's night under one controller; returns its summary (summary.json entry).
+
+    ``fidelity`` "fast" needs ``sensor_model`` (``citysim.fast.model.SensorModel``, see
+    ``citysim.sim.calibration``). ``sensors`` replaces the cameras' detectors in full fidelity
+    (calibration records them); ``observers`` are extra collectors (calibration's recorder).
+    """
     check_controllers([spec.name])
+    check_fidelity(fidelity)
+    if fidelity == "fast" and sensor_model is None:
+        raise RunError("fidelity: 'fast' needs a calibrated sensor model (citysim calibrate SCENARIO)")
     night = build_night(scenario)
-    controller = build_controller(night, spec)
+    if fidelity == "fast":
+        from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
+
+        sensors = fast_sensors(night, sensor_model)
+    controller = build_controller(night, spec, sensors)
     lamps, label = controller.ctx.lamps, spec.display_name
     collectors: list[Collector] = [
         # the per-class figures list the detector's own classes always, other kinds when present
@@ -124,6 +150,7 @@ def run_controller(
         ConfusionCollector(),
         EnergyCollector(lamps, controller.ctx.luminaire),
         LampLog(label, lamps, lamps_writer),
+        *observers,
     ]
 
     def after_step(t_s: float, agents) -> None:
@@ -135,7 +162,12 @@ def run_controller(
     night.start_physics(after_step)
     if controller.uses_camera:
         # frames come half a physics step after the physics tick they show, so both orderings agree
-        night.env.process(film(night, night.renderers(), controller, lamps, collectors))
+        if fidelity == "fast":
+            from citysim.fast.sense import sense
+
+            night.env.process(sense(night, sensors, controller, lamps, collectors))
+        else:
+            night.env.process(film(night, night.renderers(), controller, lamps, collectors))
     for i in range(len(lamps)):
         night.env.process(deliver_messages(night, controller, i))
     _run_clock(night, collectors, on_progress)

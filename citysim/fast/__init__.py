@@ -1,0 +1,8 @@
+"""Fast mode: a calibrated sensor model in place of rendering and the detector.
+
+Owns the candidates a camera may see (``geometry``), the calibration records of full-fidelity
+render-and-detect (``records``), the fitted model (``model``), the stand-ins camera controllers
+use instead of the detector and the threshold segmenter (``sensors``) and the simpy process
+that judges the cameras with them (``sense``). Calibrating and caching a scenario's model is
+``citysim.sim.calibration``; comparing fast against full is ``citysim.sim.validation``.
+"""
