@@ -6,3 +6,7 @@ use instead of the detector and the threshold segmenter (``sensors``) and the si
 that judges the cameras with them (``sense``). Calibrating and caching a scenario's model is
 ``citysim.sim.calibration``; comparing fast against full is ``citysim.sim.validation``.
 """
+
+#: How a camera is simulated: "full" renders frames for the real detector; "fast" draws what it
+#: would report from the calibrated sensor model, with no rendering.
+FIDELITIES = ("full", "fast")

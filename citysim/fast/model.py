@@ -176,7 +176,7 @@ def fit_false_alarms(frames: dict[str, np.ndarray], camera_hours: float) -> dict
     lit = (frames["light"][order] >= LIT_LEVEL).astype(int)
     prev_fa = np.concatenate([[False], fa[:-1] & (cam[1:] == cam[:-1])])
     start = fa & ~prev_fa
-    eligible = ~prev_fa
+    eligible = ~(fa & prev_fa)  # a start is drawn on every frame not continuing an episode
     start_p = [float(start[eligible & (lit == b)].sum() / max(1, (eligible & (lit == b)).sum())) for b in (0, 1)]
     lengths, run = [], 0
     for i in range(len(fa)):

@@ -13,10 +13,14 @@ from __future__ import annotations
 
 import hashlib
 import json
+import multiprocessing as mp
+import queue
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from tqdm import tqdm
 
+from citysim.config.kinds import TARGET_KINDS
 from citysim.config.scenario import ControllerSpec, Scenario, override
 from citysim.fast.geometry import CameraGeometry
 from citysim.fast.model import MODEL_VERSION, SensorModel, fit_sensor_model
@@ -27,8 +31,12 @@ from citysim.world.street import build_street
 CALIBRATION_CONTROLLER = "detector_confirmed"
 #: Calibration runs use seeds CALIBRATION_SEED_BASE + i: far from any scenario's own seed.
 CALIBRATION_SEED_BASE = 900_000_000
-DEFAULT_DURATION_S = 600.0
+DEFAULT_DURATION_S = 240.0
 DEFAULT_RUNS = 2
+#: Calibration nights carry this many times the scenario's target traffic: more candidates per
+#: rendered frame (a rendered second costs the same with 3 people in view as with 1). It crowds
+#: the street a little more than the scenario does; validation is where that would show.
+TRAFFIC_FACTOR = 3.0
 
 
 def default_cache_dir() -> Path:
@@ -65,9 +73,17 @@ def model_path(scenario: Scenario, cache_dir: Path | None, duration_s: float, ru
     return folder / f"{scenario.name}-{calibration_key(scenario, duration_s, runs)}.json"
 
 
+def calibration_scenario(scenario: Scenario, seed: int, duration_s: float) -> Scenario:
+    """The scenario on a calibration seed, ``TRAFFIC_FACTOR`` times its target traffic."""
+    classes = scenario.traffic.classes
+    updates = {f"traffic.classes.{kind}.rate_per_hour": getattr(classes, kind).rate_per_hour * TRAFFIC_FACTOR
+               for kind in TARGET_KINDS}  # fmt: skip
+    return override(scenario, {"seed": seed, "duration_s": duration_s, **updates})
+
+
 def record_run(scenario: Scenario, seed: int, duration_s: float, on_progress=None):
     """One full-fidelity calibration night: its candidate rows and judged-frame rows."""
-    night_scenario = override(scenario, {"seed": seed, "duration_s": duration_s})
+    night_scenario = calibration_scenario(scenario, seed, duration_s)
     street = build_street(night_scenario)
     sensors = RecordingSensors()
     recorder = CalibrationRecorder(CameraGeometry(street), sensors, street.lamps[0].camera.fps)
@@ -77,12 +93,12 @@ def record_run(scenario: Scenario, seed: int, duration_s: float, on_progress=Non
 
 
 def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: float = DEFAULT_DURATION_S,
-              runs: int = DEFAULT_RUNS, progress: bool = True) -> tuple[SensorModel, Path]:  # fmt: skip
+              runs: int = DEFAULT_RUNS, progress: bool = True, workers: int = 2) -> tuple[SensorModel, Path]:  # fmt: skip
     """Render-and-detect ``runs`` calibration nights, fit the sensor model, cache it; (model, path)."""
     path = model_path(scenario, cache_dir, duration_s, runs)
     bar = tqdm(total=duration_s * runs, unit="sim s", desc=f"calibrating {scenario.name} (full fidelity)",
                disable=not progress, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]")
-    parts = [record_run(scenario, seed, duration_s, on_progress=bar.update) for seed in calibration_seeds(runs)]
+    parts = _record_runs(scenario, duration_s, runs, workers, bar)
     bar.close()
     rows = merge_columns([p[0] for p in parts])
     frames = merge_columns([p[1] for p in parts])
@@ -93,7 +109,7 @@ def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: 
 
 
 def sensor_model_for(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: float = DEFAULT_DURATION_S,
-                     runs: int = DEFAULT_RUNS, progress: bool = True) -> SensorModel:  # fmt: skip
+                     runs: int = DEFAULT_RUNS, progress: bool = True, workers: int = 2) -> SensorModel:  # fmt: skip
     """The scenario's cached sensor model, calibrated now (with a progress bar) if there is none."""
     path = model_path(scenario, cache_dir, duration_s, runs)
     if path.exists():
@@ -101,4 +117,27 @@ def sensor_model_for(scenario: Scenario, cache_dir: Path | None = None, *, durat
             return SensorModel.load(path)
         except (ValueError, KeyError, TypeError):
             pass  # another version or a damaged file: calibrate again
-    return calibrate(scenario, cache_dir, duration_s=duration_s, runs=runs, progress=progress)[0]
+    return calibrate(scenario, cache_dir, duration_s=duration_s, runs=runs, progress=progress, workers=workers)[0]
+
+
+def _record_worker(args):
+    scenario, seed, duration_s, progress_queue = args
+    return record_run(scenario, seed, duration_s, on_progress=progress_queue.put if progress_queue else None)
+
+
+def _record_runs(scenario: Scenario, duration_s: float, runs: int, workers: int, bar) -> list:
+    """The calibration nights, in parallel processes when ``workers`` > 1 (results in seed order)."""
+    seeds = calibration_seeds(runs)
+    if workers <= 1 or runs == 1:
+        return [record_run(scenario, seed, duration_s, on_progress=bar.update) for seed in seeds]
+    with mp.Manager() as manager:
+        q = manager.Queue()
+        ctx = mp.get_context("spawn")  # fresh interpreters: no forked OpenCV/pymunk state
+        with ProcessPoolExecutor(max_workers=min(workers, runs), mp_context=ctx) as pool:
+            futures = [pool.submit(_record_worker, (scenario, seed, duration_s, q)) for seed in seeds]
+            while not all(f.done() for f in futures):
+                try:
+                    bar.update(q.get(timeout=0.2))
+                except queue.Empty:
+                    pass
+            return [f.result() for f in futures]

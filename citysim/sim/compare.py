@@ -28,7 +28,8 @@ from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.registry import CONTROLLERS
 from citysim.metrics.crossings import OBJECTS_CSV_HEADER
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
-from citysim.sim.loop import check_controllers, controller_spec, run_controller
+from citysim.sim.calibration import sensor_model_for
+from citysim.sim.loop import check_controllers, check_fidelity, controller_spec, run_controller
 from citysim.world.coverage import camera_coverage
 from citysim.world.street import build_street
 from detector.outdir import staged_output
@@ -49,6 +50,11 @@ def resolve_controllers(scenario: Scenario, names: Sequence[str] | None) -> list
     return specs
 
 
+def needs_sensor_model(specs: Sequence[ControllerSpec]) -> bool:
+    """Whether any controller watches cameras (the others run alike in fast and full fidelity)."""
+    return any(CONTROLLERS[s.name].uses_camera for s in specs)
+
+
 def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
     """Each controller's savings as a share of the oracle's (1: as much as the bound, None without
     an oracle or when the oracle saves nothing), placed after ``savings_vs_always_on``."""
@@ -66,18 +72,19 @@ def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
     return out
 
 
-def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None) -> dict:
+def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None, fidelity: str = "full",
+                 sensor_model=None) -> dict:  # fmt: skip
     """One controller's run writing its part of lamps.csv / objects.csv into ``part_dir``."""
     part_dir.mkdir(parents=True, exist_ok=True)
     label = spec.display_name
     with open(part_dir / f"{label}.lamps.csv", "w", newline="") as lf, \
             open(part_dir / f"{label}.objects.csv", "w", newline="") as of:  # fmt: skip
         return run_controller(scenario, spec, lamps_writer=csv.writer(lf), objects_writer=csv.writer(of),
-                              on_progress=on_progress)
+                              on_progress=on_progress, fidelity=fidelity, sensor_model=sensor_model)
 
 
 def _worker(args):
-    scenario, spec, part_dir, progress_queue = args
+    scenario, spec, part_dir, progress_queue, fidelity, sensor_model = args
     last = [0.0]
 
     def report(dt_s: float) -> None:
@@ -86,7 +93,8 @@ def _worker(args):
             progress_queue.put(last[0])
             last[0] = 0.0
 
-    summary = run_to_files(scenario, spec, Path(part_dir), on_progress=report)
+    summary = run_to_files(scenario, spec, Path(part_dir), on_progress=report, fidelity=fidelity,
+                           sensor_model=sensor_model)
     if progress_queue is not None and last[0] > 0:
         progress_queue.put(last[0])
     return spec.display_name, summary
@@ -100,13 +108,23 @@ def run_comparison(
     out_dir: Path | None = None,
     workers: int = 1,
     scenario_file: str | None = None,
+    fidelity: str = "full",
+    sensor_model=None,
+    cache_dir: Path | None = None,
 ) -> dict:
     """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
-    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these)."""
+    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
+
+    ``fidelity`` "fast": cameras judged by the scenario's sensor model (``sensor_model``, else the
+    one cached in ``cache_dir``, calibrated first if there is none; see ``citysim.sim.calibration``).
+    """
     specs = resolve_controllers(scenario, controllers)
+    check_fidelity(fidelity)
+    if fidelity == "fast" and sensor_model is None and needs_sensor_model(specs):
+        sensor_model = sensor_model_for(scenario, cache_dir, progress=progress)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
-               "duration_s": scenario.duration_s, "lamps": None,
+               "duration_s": scenario.duration_s, "fidelity": fidelity, "lamps": None,
                "coverage": camera_coverage(build_street(scenario)).as_dict(), "controllers": {}}
     with staged_output(out_dir) if out_dir is not None else _scratch() as stage:
         parts = stage / ".parts"
@@ -116,7 +134,8 @@ def run_comparison(
         results: dict[str, dict] = {}
         if workers == 1:
             for spec in specs:
-                results[spec.display_name] = run_to_files(scenario, spec, parts, on_progress=bar.update)
+                results[spec.display_name] = run_to_files(scenario, spec, parts, on_progress=bar.update,
+                                                          fidelity=fidelity, sensor_model=sensor_model)
         else:
             with mp.Manager() as manager:
                 q = manager.Queue()
@@ -124,7 +143,8 @@ def run_comparison(
                 with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
                     # camera controllers first: the cheap ones fill the gaps at the end
                     heavy_first = sorted(specs, key=lambda s: not CONTROLLERS[s.name].uses_camera)
-                    futures = [pool.submit(_worker, (scenario, spec, str(parts), q)) for spec in heavy_first]
+                    futures = [pool.submit(_worker, (scenario, spec, str(parts), q, fidelity, sensor_model))
+                               for spec in heavy_first]  # fmt: skip
                     pending = set(futures)
                     while pending:
                         try:

@@ -26,6 +26,7 @@ from citysim.control.base import ControlContext, Controller
 from citysim.control.lamps import Lamp, levels_at
 from citysim.control.network import Network
 from citysim.control.registry import CONTROLLERS
+from citysim.fast import FIDELITIES
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import ConfusionCollector
 from citysim.metrics.crossings import CrossingsCollector
@@ -43,11 +44,6 @@ SUMMARY_KEYS = (
     "energy_per_hour_kwh", "energy_split_kwh", "objects", "per_class", "detection",
     "lamp_triggers", "network", "agents_spawned",
 )  # fmt: skip
-
-
-#: How a camera is simulated: "full" renders frames for the real detector; "fast" draws what it
-#: would report from a calibrated sensor model (``citysim.fast``), with no rendering.
-FIDELITIES = ("full", "fast")
 
 
 class RunError(ValueError):
