@@ -229,7 +229,7 @@ def _add_calibrate_validate(sub) -> None:
     c.add_argument("scenario", type=Path, help="scenario YAML file")
     c.add_argument("--cache", type=Path, default=None,
                    help="folder of calibrated sensor models (default: .cache/sensor_models in the project)")
-    c.add_argument("--duration", type=number(float, gt=0, le=MAX_DURATION_S, unit="s"), default=240.0,
+    c.add_argument("--duration", type=number(float, gt=0, le=MAX_DURATION_S, unit="s"), default=120.0,
                    help="simulated seconds per calibration night")
     c.add_argument("--runs", type=number(int, ge=1), default=2, help="calibration nights (seeds)")
     c.add_argument("--workers", type=number(int, ge=1), default=2, help="parallel processes, one night each")

@@ -31,7 +31,7 @@ from citysim.world.street import build_street
 CALIBRATION_CONTROLLER = "detector_confirmed"
 #: Calibration runs use seeds CALIBRATION_SEED_BASE + i: far from any scenario's own seed.
 CALIBRATION_SEED_BASE = 900_000_000
-DEFAULT_DURATION_S = 240.0
+DEFAULT_DURATION_S = 120.0
 DEFAULT_RUNS = 2
 #: Calibration nights carry this many times the scenario's target traffic: more candidates per
 #: rendered frame (a rendered second costs the same with 3 people in view as with 1). It crowds

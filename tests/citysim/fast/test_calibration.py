@@ -69,3 +69,11 @@ def test_a_bad_fidelity_exits_2_naming_the_valid_values(capsys, tmp_path):
     assert info.value.code == 2
     assert "--fidelity" in err and "'full'" in err and "'fast'" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_validate_and_calibrate_refuse_bad_arguments_before_any_work(capsys):
+    assert main(["validate", "scenarios/suburban_night.yaml", "--controllers", "detector,nope"]) == 2
+    assert "controllers: unknown 'nope'" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as info:
+        main(["calibrate", "scenarios/suburban_night.yaml", "--runs", "0"])
+    assert info.value.code == 2 and "--runs" in capsys.readouterr().err
