@@ -47,8 +47,12 @@ YOUNG_FRAMES = 15
 PRIOR_FRAMES = 4.0
 #: Sample lists are capped at this many values (a deterministic, evenly spaced subset).
 MAX_SAMPLES = 2000
+#: Background ages (frames since its reset) the threshold samples are kept apart by: a young
+#: MOG2 model reports big foreground regions on its own, and how often a background is young
+#: depends on how often the lamps in view switch, which differs between controllers.
+AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 1
+MODEL_VERSION = 2
 
 
 def bin_of(values: np.ndarray, edges: tuple[float, ...]) -> np.ndarray:
@@ -68,11 +72,23 @@ def table_shape() -> tuple[int, ...]:
     return (len(KINDS), len(DISTANCE_EDGES_M), len(BEARING_EDGES_DEG), 2, 2, len(SPEED_EDGES_MPS))
 
 
-def threshold_condition(kind: int, forward_m: float, lit: bool) -> str:
-    """The key of the threshold samples: the nearest candidate's kind and distance bin, or 'none'."""
+def background_age_bin(learning_rate: float | None) -> int:
+    """The ``AGE_EDGES_FRAMES`` bin of a background fed at MOG2's automatic ``learning_rate``
+    (1 / min(2 (n + 1), history) after n frames; 1 for the first frame, None: unknown, young)."""
+    if learning_rate is None or learning_rate >= 1.0:
+        return 0
+    frames_before = 0.5 / learning_rate - 1.0
+    return int(bin_of(np.array([frames_before]), tuple(float(e) for e in AGE_EDGES_FRAMES))[0])
+
+
+def threshold_condition(kind: int, forward_m: float, lit: bool, age_bin: int | None = None) -> str:
+    """The key of the threshold samples: the nearest candidate's kind and distance bin, or 'none'
+    and the light; with ``age_bin`` the finer key that also holds the background's age."""
     if kind < 0:
-        return f"none/{int(lit)}"
-    return f"{KINDS[kind]}/{int(bin_of(np.array([forward_m]), DISTANCE_EDGES_M)[0])}"
+        key = f"none/{int(lit)}"
+    else:
+        key = f"{KINDS[kind]}/{int(bin_of(np.array([forward_m]), DISTANCE_EDGES_M)[0])}"
+    return key if age_bin is None else f"{key}/age{age_bin}"
 
 
 @dataclass
@@ -200,11 +216,12 @@ def fit_false_alarms(frames: dict[str, np.ndarray], camera_hours: float) -> dict
 
 
 def fit_area_fractions(frames: dict[str, np.ndarray]) -> dict[str, list[float]]:
-    keys = [threshold_condition(int(k), float(d), bool(lit >= LIT_LEVEL)) for k, d, lit in
-            zip(frames["near_kind"], frames["near_forward_m"], frames["light"], strict=True)]  # fmt: skip
+    """Samples per condition, and per condition and background age (looked up first)."""
     by_key: dict[str, list[float]] = {}
-    for key, frac in zip(keys, frames["area_fraction"].tolist(), strict=True):
-        by_key.setdefault(key, []).append(frac)
+    for k, d, lit, age, frac in zip(frames["near_kind"], frames["near_forward_m"], frames["light"],
+                                    frames["age_bin"], frames["area_fraction"].tolist(), strict=True):  # fmt: skip
+        for a in (None, int(age)):
+            by_key.setdefault(threshold_condition(int(k), float(d), bool(lit >= LIT_LEVEL), a), []).append(frac)
     return {key: _capped(np.array(v)) for key, v in sorted(by_key.items())}
 
 

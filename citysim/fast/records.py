@@ -17,7 +17,7 @@ import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
 from citysim.fast.geometry import CameraGeometry
-from citysim.fast.model import KINDS, YOUNG_FRAMES
+from citysim.fast.model import KINDS, YOUNG_FRAMES, background_age_bin
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.world.agents import AgentState
@@ -26,7 +26,7 @@ IOU_MATCH = 0.3
 ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
                "hit", "det_class")  # fmt: skip
 FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
-                 "regions", "near_kind", "near_forward_m", "area_fraction")  # fmt: skip
+                 "regions", "near_kind", "near_forward_m", "area_fraction", "age_bin")  # fmt: skip
 
 
 def is_young(learning_rate: float | None) -> bool:
@@ -138,7 +138,8 @@ class CalibrationRecorder(Collector):
                   DETECTOR_CLASSES.index(fa_row.cls) if fa_row is not None else -1,
                   len(recorded.inner.last_regions) > 0,
                   KINDS.index(self.agents[near].cls) if near >= 0 else -1,
-                  float(cand.forward_m[near, lamp_index]) if near >= 0 else np.nan, recorded.last_area_fraction)  # fmt: skip
+                  float(cand.forward_m[near, lamp_index]) if near >= 0 else np.nan, recorded.last_area_fraction,
+                  background_age_bin(recorded.last_rate))  # fmt: skip
         for col, value in zip(FRAME_COLUMNS, values, strict=True):
             self.frames[col].append(value)
 

@@ -21,7 +21,14 @@ import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
 from citysim.fast.geometry import CameraGeometry
-from citysim.fast.model import KINDS, LIT_LEVEL, SensorModel, cell_of, threshold_condition
+from citysim.fast.model import (
+    KINDS,
+    LIT_LEVEL,
+    SensorModel,
+    background_age_bin,
+    cell_of,
+    threshold_condition,
+)
 from citysim.fast.records import is_young
 from detector.detector import Detection
 from detector.segment import SegmenterParams
@@ -261,10 +268,13 @@ class SensedSegmenter(_LearningRate):
         idx = s.candidates_of(i)
         if len(idx):
             near = int(idx[np.argmin(s.cand.forward_m[idx, i])])
-            key = threshold_condition(KINDS.index(s.agents[near].cls), float(s.cand.forward_m[near, i]), True)
+            kind, forward_m, lit = KINDS.index(s.agents[near].cls), float(s.cand.forward_m[near, i]), True
         else:
-            key = threshold_condition(-1, 0.0, bool(s.lit(i)))
-        samples = s.area_samples.get(key)
+            kind, forward_m, lit = -1, 0.0, bool(s.lit(i))
+        # this background age's samples where calibration saw the condition at that age, else any age's
+        samples = s.area_samples.get(threshold_condition(kind, forward_m, lit, background_age_bin(learning_rate)))
+        if samples is None:
+            samples = s.area_samples.get(threshold_condition(kind, forward_m, lit))
         if samples is None or not len(samples):
             return _Areas(np.zeros(0))
         fraction = float(samples[int(self.rng.integers(len(samples)))])

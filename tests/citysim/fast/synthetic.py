@@ -29,7 +29,7 @@ def frames(n: int = 0, **columns) -> dict[str, np.ndarray]:
     """Judged-frame rows: every column of ``FRAME_COLUMNS``, defaults for the ones not given."""
     defaults = {"camera": 0, "frame": np.arange(n), "light": 0.2, "has_candidates": False, "fa": False,
                 "fa_distance_m": 15.0, "fa_box": None, "fa_class": 1, "regions": False, "near_kind": -1,
-                "near_forward_m": np.nan, "area_fraction": 0.0}  # fmt: skip
+                "near_forward_m": np.nan, "area_fraction": 0.0, "age_bin": 2}  # fmt: skip
     out = {}
     for col in FRAME_COLUMNS:
         if col == "fa_box":

@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from citysim.fast.model import KINDS, PRIOR_FRAMES, SensorModel, cell_of, fit_sensor_model
+from citysim.fast.model import (
+    KINDS,
+    PRIOR_FRAMES,
+    SensorModel,
+    background_age_bin,
+    cell_of,
+    fit_sensor_model,
+)
 from tests.citysim.fast.synthetic import frames, rows
 
 PED, CAR = KINDS.index("pedestrian"), KINDS.index("vehicle")
@@ -62,12 +69,15 @@ def test_detected_classes_and_threshold_areas_come_from_their_frames():
     det = np.where(np.arange(100) < 40, 4, 3)  # vehicles reported as 'vehicle' 40 times, 'cyclist' 10
     car_rows = rows(100, kind=CAR, hit=hit, det_class=np.where(hit, det, -1), speed_mps=11.0)
     area = frames(4, near_kind=[-1, -1, CAR, CAR], near_forward_m=[np.nan, np.nan, 9.0, 9.0],
-                  area_fraction=[0.0, 0.001, 0.08, 0.06])
+                  area_fraction=[0.0, 0.001, 0.08, 0.06], age_bin=[0, 2, 2, 2])
     model = fit_sensor_model(car_rows, area, camera_hours=1.0)
     classes = model.class_given_hit["vehicle"]
     assert classes[4] == pytest.approx(40.5 / 50.5) and classes[3] == pytest.approx(10 / 50.5)
     assert model.area_fraction["none/0"] == [0.0, 0.001]
-    assert model.area_fraction["vehicle/2"] == [0.08, 0.06]
+    # a just-rebuilt background's frames are kept apart too (looked up first in fast mode)
+    assert model.area_fraction["none/0/age0"] == [0.0] and model.area_fraction["none/0/age2"] == [0.001]
+    assert model.area_fraction["vehicle/2"] == [0.08, 0.06] == model.area_fraction["vehicle/2/age2"]
+    assert background_age_bin(1.0) == 0 and background_age_bin(1 / 32) == 1 and background_age_bin(1 / 500) == 2
 
 
 def test_a_saved_model_loads_equal(tmp_path):
