@@ -52,7 +52,7 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 2
+MODEL_VERSION = 3
 
 
 def bin_of(values: np.ndarray, edges: tuple[float, ...]) -> np.ndarray:

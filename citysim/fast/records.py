@@ -11,6 +11,7 @@ and one per judged frame: the columns ``citysim.fast.model.fit_sensor_model`` re
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -23,6 +24,11 @@ from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.world.agents import AgentState
 
 IOU_MATCH = 0.3
+#: A target detection matching no truth box whose ground point is this near a candidate is that
+#: candidate's (its own light spot, a shadow, a part cut off), m; for an agent carrying a light
+#: (headlights, a flashlight) its beam on the ground reaches farther.
+NEAR_M = 3.0
+LIT_REACH_M = 20.0
 ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
                "hit", "det_class")  # fmt: skip
 FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
@@ -121,6 +127,7 @@ class CalibrationRecorder(Collector):
         hits, fa = self._match(truth, detections)
         cand, light = self._candidates()
         idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
+        fa = self._near_candidates(lamp_index, idx, hits, fa)
         young = is_young(recorded.last_rate)
         for a_i in idx.tolist():
             agent = self.agents[a_i]
@@ -142,6 +149,30 @@ class CalibrationRecorder(Collector):
                   background_age_bin(recorded.last_rate))  # fmt: skip
         for col, value in zip(FRAME_COLUMNS, values, strict=True):
             self.frames[col].append(value)
+
+    def _near_candidates(self, lamp_index: int, idx: np.ndarray, hits: dict[int, int], fa: list) -> list:
+        """Unmatched target detections that stand on the ground near a candidate are that candidate's
+        (a walker's light spot, a car's beam on the road ahead of it): a hit, not a false alarm."""
+        if not fa or not len(idx):
+            return fa
+        cam = self.geometry.cameras[lamp_index]
+        left = []
+        for d in fa:
+            x, y, w, h = d.box_px
+            ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]], dtype=np.float64))[0]
+            owner = None
+            if np.all(np.isfinite(ground)):
+                for a_i in idx.tolist():
+                    agent = self.agents[a_i]
+                    reach_m = LIT_REACH_M if agent.light_on else NEAR_M
+                    if agent.object_id not in hits and math.hypot(ground[0] - agent.x_m, ground[1] - agent.y_m) <= reach_m:
+                        owner = agent
+                        break
+            if owner is None:
+                left.append(d)
+            else:
+                hits[owner.object_id] = DETECTOR_CLASSES.index(d.cls)
+        return left
 
     def _match(self, truth: Sequence, detections: Sequence) -> tuple[dict[int, int], list]:
         """Truth object id -> detected class index of its target detection; unmatched target detections."""
