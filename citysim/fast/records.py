@@ -5,7 +5,8 @@ camera controller whose detectors are wrapped by ``RecordingSensors`` (each judg
 learning rate and detections are kept, and the threshold baselines' whole-frame segmenter is
 run on the same frame) and with ``CalibrationRecorder`` among the collectors. The recorder
 matches the detector's target detections to the renderer's truth boxes (IoU >= 0.3, greedy, as
-``citysim.metrics.confusion`` does) and writes one row per candidate (``citysim.fast.geometry``)
+``citysim.metrics.confusion`` does; an unmatched one standing on the ground near a candidate,
+3 m, or 20 m for one carrying a light, is that candidate's) and writes one row per candidate (``citysim.fast.geometry``)
 and one per judged frame: the columns ``citysim.fast.model.fit_sensor_model`` reads.
 """
 
