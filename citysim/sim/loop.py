@@ -130,10 +130,12 @@ def run_controller(
     """
     check_controllers([spec.name])
     check_fidelity(fidelity)
-    if fidelity == "fast" and sensor_model is None:
+    # controllers that watch no camera run alike in both fidelities and need no sensor model
+    fast_cameras = fidelity == "fast" and CONTROLLERS[spec.name].uses_camera
+    if fast_cameras and sensor_model is None:
         raise RunError("fidelity: 'fast' needs a calibrated sensor model (citysim calibrate SCENARIO)")
     night = build_night(scenario)
-    if fidelity == "fast":
+    if fast_cameras:
         from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
 
         sensors = fast_sensors(night, sensor_model)
@@ -158,7 +160,7 @@ def run_controller(
     night.start_physics(after_step)
     if controller.uses_camera:
         # frames come half a physics step after the physics tick they show, so both orderings agree
-        if fidelity == "fast":
+        if fast_cameras:
             from citysim.fast.sense import sense
 
             night.env.process(sense(night, sensors, controller, lamps, collectors))
