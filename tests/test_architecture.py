@@ -22,11 +22,12 @@ ALLOWED_STAGES = {
     "render": {"config", "world"},
     "control": {"config", "world"},
     "metrics": {"config", "world", "control"},
-    "sim": {"config", "world", "render", "control", "metrics"},
-    "sweep": {"config", "world", "control", "metrics", "sim"},
+    "fast": {"config", "world", "control", "metrics"},
+    "sim": {"config", "world", "render", "control", "metrics", "fast"},
+    "sweep": {"config", "world", "control", "metrics", "fast", "sim"},
     # a year is a table of runs through sim; its report section reads year.json, not the package
-    "year": {"config", "world", "control", "metrics", "sim"},
-    "report": {"config", "world", "render", "control", "metrics", "sim", "sweep"},
+    "year": {"config", "world", "control", "metrics", "fast", "sim"},
+    "report": {"config", "world", "render", "control", "metrics", "fast", "sim", "sweep"},
 }
 #: Compiled per-pixel kernels may be long: numba cannot call helpers that cheaply.
 LONG_MODULES_ALLOWED = {"citysim/render/kernels.py"}

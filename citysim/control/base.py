@@ -36,6 +36,10 @@ class ControlContext:
     network: Network
     start_hour: float = 22.0
     spec: ControllerSpec = field(default_factory=lambda: ControllerSpec(name="always_on"))
+    #: Where camera controllers get their per-camera detectors and segmenters: None, the real
+    #: ones on rendered frames; in fast mode a sensor model (``citysim.fast.sensors.FastSensors``:
+    #: ``detectors(ctx, threshold)`` and ``segmenters(ctx)``) with the same interface.
+    sensors: object | None = None
 
     @property
     def hold_s(self) -> float:

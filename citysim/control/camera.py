@@ -48,7 +48,10 @@ class ForegroundThreshold(Controller):
         if ctx.spec.threshold_fraction is not None:
             self.fraction = ctx.spec.threshold_fraction
         # the whole frame, as the paper's baseline; the background forgets at the camera's own rate
-        self.segmenters = [Segmenter(SegmenterParams(), fps=1.0 / ctx.frame_period_s) for _ in ctx.lamps]
+        if ctx.sensors is not None:  # fast mode: a calibrated per-frame trigger model, same interface
+            self.segmenters = ctx.sensors.segmenters(ctx)
+        else:
+            self.segmenters = [Segmenter(SegmenterParams(), fps=1.0 / ctx.frame_period_s) for _ in ctx.lamps]
         self.light = LightChangeWatch(ctx)
         self.last_counts = [0] * len(ctx.lamps)
         self.clock = BackgroundClock(len(ctx.lamps), 1.0 / ctx.frame_period_s)

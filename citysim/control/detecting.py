@@ -38,14 +38,17 @@ class DetectorPerFrame(Controller):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        from detector.detector import Detector
-        from detector.general_model import default_model
-
-        model = default_model()
         threshold = 0.5 if ctx.spec.target_threshold is None else ctx.spec.target_threshold
-        tracking = self.tracking if ctx.spec.tracking is None else ctx.spec.tracking
-        self.detectors = [Detector(site.camera, model=model, target_threshold=threshold, tracking=tracking)
-                          for site in ctx.street.lamps]  # fmt: skip
+        if ctx.sensors is not None:  # fast mode: a calibrated sensor model with the Detector's interface
+            self.detectors = ctx.sensors.detectors(ctx, threshold)
+        else:
+            from detector.detector import Detector
+            from detector.general_model import default_model
+
+            model = default_model()
+            tracking = self.tracking if ctx.spec.tracking is None else ctx.spec.tracking
+            self.detectors = [Detector(site.camera, model=model, target_threshold=threshold, tracking=tracking)
+                              for site in ctx.street.lamps]  # fmt: skip
         self.light = LightChangeWatch(ctx)
         self.clock = BackgroundClock(len(ctx.lamps), 1.0 / ctx.frame_period_s)
 

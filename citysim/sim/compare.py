@@ -31,7 +31,8 @@ from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.registry import CONTROLLERS
 from citysim.metrics.crossings import OBJECTS_CSV_HEADER
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
-from citysim.sim.loop import check_controllers, controller_spec, run_controller
+from citysim.sim.calibration import sensor_model_for
+from citysim.sim.loop import check_controllers, check_fidelity, controller_spec, run_controller
 from citysim.sim.replay import record_traffic
 from citysim.world.coverage import camera_coverage
 from citysim.world.street import build_street
@@ -53,6 +54,11 @@ def resolve_controllers(scenario: Scenario, names: Sequence[str] | None) -> list
     return specs
 
 
+def needs_sensor_model(specs: Sequence[ControllerSpec]) -> bool:
+    """Whether any controller watches cameras (the others run alike in fast and full fidelity)."""
+    return any(CONTROLLERS[s.name].uses_camera for s in specs)
+
+
 def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
     """Each controller's savings as a share of the oracle's (1: as much as the bound, None without
     an oracle or when the oracle saves nothing), placed after ``savings_vs_always_on``."""
@@ -71,7 +77,7 @@ def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
 
 
 def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None,
-                 traffic: Path | None = None) -> dict:  # fmt: skip
+                 traffic: Path | None = None, fidelity: str = "full", sensor_model=None) -> dict:  # fmt: skip
     """One controller's run writing its part of lamps.csv / objects.csv into ``part_dir``
     (replaying the traffic recorded in ``traffic``, if given)."""
     part_dir.mkdir(parents=True, exist_ok=True)
@@ -79,7 +85,8 @@ def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_pr
     with open(part_dir / f"{label}.lamps.csv", "w", newline="") as lf, \
             open(part_dir / f"{label}.objects.csv", "w", newline="") as of:  # fmt: skip
         return run_controller(scenario, spec, lamps_writer=csv.writer(lf), objects_writer=csv.writer(of),
-                              on_progress=on_progress, traffic=traffic)
+                              on_progress=on_progress, traffic=traffic, fidelity=fidelity,
+                              sensor_model=sensor_model)
 
 
 class _Batched:
@@ -100,10 +107,11 @@ class _Batched:
 
 
 def _worker(args):
-    scenario, spec, part_dir, progress_queue, traffic = args
+    scenario, spec, part_dir, progress_queue, traffic, fidelity, sensor_model = args
     report = _Batched(progress_queue)
     summary = run_to_files(scenario, spec, Path(part_dir), on_progress=report,
-                           traffic=None if traffic is None else Path(traffic))  # fmt: skip
+                           traffic=None if traffic is None else Path(traffic), fidelity=fidelity,
+                           sensor_model=sensor_model)  # fmt: skip
     report.flush()
     return spec.display_name, summary
 
@@ -126,6 +134,8 @@ def run_comparison(
     scenario_file: str | None = None,
     replay_traffic: bool = True,
     fidelity: str = "full",
+    sensor_model=None,
+    cache_dir: Path | None = None,
 ) -> dict:
     """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
     (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
@@ -133,14 +143,16 @@ def run_comparison(
     ``replay_traffic``: simulate the traffic once and replay it to every controller (the default);
     False steps a world per controller (the same results, bit for bit, at a higher cost).
 
-    ``fidelity``: "full" renders and judges every camera frame; the calibrated "fast" sensor model
-    plugs in here (being added on its own branch); anything else is a ValueError."""
-    if fidelity != "full":
-        raise ValueError(f"fidelity: must be 'full' (fast mode is not in this branch), got {fidelity!r}")
+    ``fidelity`` "fast": cameras judged by the scenario's sensor model (``sensor_model``, else the
+    one cached in ``cache_dir``, calibrated first if there is none; see ``citysim.sim.calibration``).
+    """
     specs = resolve_controllers(scenario, controllers)
+    check_fidelity(fidelity)
+    if fidelity == "fast" and sensor_model is None and needs_sensor_model(specs):
+        sensor_model = sensor_model_for(scenario, cache_dir, progress=progress)
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
-               "duration_s": scenario.duration_s, "lamps": None,
+               "duration_s": scenario.duration_s, "fidelity": fidelity, "lamps": None,
                "coverage": camera_coverage(build_street(scenario)).as_dict(), "controllers": {}}
     with staged_output(out_dir) if out_dir is not None else _scratch() as stage:
         parts = stage / ".parts"
@@ -154,7 +166,8 @@ def run_comparison(
                 record_traffic(scenario, traffic, on_progress=bar.update)
             for spec in specs:
                 results[spec.display_name] = run_to_files(scenario, spec, parts, on_progress=bar.update,
-                                                          traffic=traffic)  # fmt: skip
+                                                          traffic=traffic, fidelity=fidelity,
+                                                          sensor_model=sensor_model)  # fmt: skip
         else:
             with mp.Manager() as manager:
                 q = manager.Queue()
@@ -164,7 +177,8 @@ def run_comparison(
                     heavy_first = sorted(specs, key=lambda s: not CONTROLLERS[s.name].uses_camera)
                     # the recorder first: the controllers replay its chunks as it writes them
                     futures = [] if traffic is None else [pool.submit(_record_worker, (scenario, str(traffic), q))]
-                    futures += [pool.submit(_worker, (scenario, spec, str(parts), q, traffic and str(traffic)))
+                    futures += [pool.submit(_worker, (scenario, spec, str(parts), q, traffic and str(traffic),
+                                                      fidelity, sensor_model))
                                 for spec in heavy_first]  # fmt: skip
                     pending = set(futures)
                     while pending:

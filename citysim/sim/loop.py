@@ -27,6 +27,7 @@ from citysim.control.base import ControlContext, Controller
 from citysim.control.lamps import Lamp, levels_at
 from citysim.control.network import Network
 from citysim.control.registry import CONTROLLERS
+from citysim.fast import FIDELITIES
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import ConfusionCollector
 from citysim.metrics.crossings import CrossingsCollector
@@ -51,6 +52,11 @@ class RunError(ValueError):
     """A run that cannot start (e.g. an unknown controller); the message names the field."""
 
 
+def check_fidelity(fidelity: str) -> None:
+    if fidelity not in FIDELITIES:
+        raise RunError(f"fidelity: unknown {fidelity!r}; valid: {', '.join(FIDELITIES)}")
+
+
 def controller_spec(scenario: Scenario, name: str) -> ControllerSpec:
     """The scenario's spec for ``name`` (its label or registry name), else a default one."""
     for spec in scenario.controllers:
@@ -65,7 +71,7 @@ def check_controllers(names: list[str]) -> None:
         raise RunError(f"controllers: unknown {', '.join(map(repr, unknown))}; valid: {', '.join(CONTROLLERS)}")
 
 
-def build_controller(night: Night, spec: ControllerSpec) -> Controller:
+def build_controller(night: Night, spec: ControllerSpec, sensors: object | None = None) -> Controller:
     """The controller of ``spec`` with its lamps (at their initial level) and radio network."""
     scenario = night.scenario
     controller_cls = CONTROLLERS[spec.name]
@@ -77,7 +83,7 @@ def build_controller(night: Night, spec: ControllerSpec) -> Controller:
     network = Network(night.env, len(lamps), scenario.network, night.streams["network"])
     ctx = ControlContext(street=night.street, lamps=lamps, luminaire=lum,
                          frame_period_s=1.0 / night.street.lamps[0].camera.fps, rng=night.streams["control"],
-                         network=network, start_hour=scenario.start_hour, spec=spec)  # fmt: skip
+                         network=network, start_hour=scenario.start_hour, spec=spec, sensors=sensors)  # fmt: skip
     return controller_cls(ctx)
 
 
@@ -114,15 +120,31 @@ def run_controller(
     objects_writer: csv.writer | None = None,
     on_progress: Callable[[float], None] | None = None,
     traffic: Path | None = None,
+    fidelity: str = "full",
+    sensor_model=None,
+    sensors: object | None = None,
+    observers: Sequence[Collector] = (),
 ) -> dict:
     """Simulate the scenario's night under one controller; returns its summary (summary.json entry).
 
     ``traffic``: a folder of this scenario's recorded traffic (``citysim.sim.replay``) to replay
     instead of stepping the world; the agents, and so the summary, are the same bit for bit.
+    ``fidelity`` "fast" needs ``sensor_model`` (``citysim.fast.model.SensorModel``, see
+    ``citysim.sim.calibration``). ``sensors`` replaces the cameras' detectors in full fidelity
+    (calibration records them); ``observers`` are extra collectors (calibration's recorder).
     """
     check_controllers([spec.name])
+    check_fidelity(fidelity)
+    # controllers that watch no camera run alike in both fidelities and need no sensor model
+    fast_cameras = fidelity == "fast" and CONTROLLERS[spec.name].uses_camera
+    if fast_cameras and sensor_model is None:
+        raise RunError("fidelity: 'fast' needs a calibrated sensor model (citysim calibrate SCENARIO)")
     night = build_night(scenario, replay=None if traffic is None else TrafficReplay(traffic))
-    controller = build_controller(night, spec)
+    if fast_cameras:
+        from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
+
+        sensors = fast_sensors(night, sensor_model)
+    controller = build_controller(night, spec, sensors)
     lamps, label = controller.ctx.lamps, spec.display_name
     collectors: list[Collector] = [
         # the per-class figures list the detector's own classes always, other kinds when present
@@ -131,6 +153,7 @@ def run_controller(
         ConfusionCollector(),
         EnergyCollector(lamps, controller.ctx.luminaire),
         LampLog(label, lamps, lamps_writer),
+        *observers,
     ]
 
     def after_step(t_s: float, agents) -> None:
@@ -142,7 +165,12 @@ def run_controller(
     night.start_physics(after_step)
     if controller.uses_camera:
         # frames come half a physics step after the physics tick they show, so both orderings agree
-        night.env.process(film(night, night.renderers(), controller, lamps, collectors))
+        if fast_cameras:
+            from citysim.fast.sense import sense
+
+            night.env.process(sense(night, sensors, controller, lamps, collectors))
+        else:
+            night.env.process(film(night, night.renderers(), controller, lamps, collectors))
     for i in range(len(lamps)):
         night.env.process(deliver_messages(night, controller, i))
     _run_clock(night, collectors, on_progress)

@@ -35,6 +35,8 @@ from pathlib import Path
 from typing import Any
 
 from citysim.config.scenario import Scenario, ScenarioError
+from citysim.fast import FIDELITIES
+from citysim.sweep.fidelity import check_points, check_report, sensor_models, write_check
 from citysim.sweep.results import ResultsFile, flatten_summary
 from citysim.sweep.spec import ResolvedSweep, SweepError, SweepPoint, load_sweep
 
@@ -69,7 +71,8 @@ def failed_rows(point: SweepPoint, controllers: Sequence[str], error: str) -> li
 
 
 def run_point(
-    point: SweepPoint, scenario: Scenario, controllers: Sequence[str], save_objects: bool
+    point: SweepPoint, scenario: Scenario, controllers: Sequence[str], save_objects: bool,
+    fidelity: str = "full", sensor_model=None,
 ) -> PointResult:
     """The Dask task: every controller of ``scenario`` on one point. Never raises: failures are rows."""
     from citysim.sim.compare import run_comparison
@@ -79,7 +82,8 @@ def run_point(
     try:
         with tempfile.TemporaryDirectory(prefix="citysim-point-") as tmp:
             out_dir = Path(tmp) / "run" if save_objects else None
-            summary = run_comparison(scenario, progress=False, out_dir=out_dir, workers=1)
+            summary = run_comparison(scenario, progress=False, out_dir=out_dir, workers=1, fidelity=fidelity,
+                                     sensor_model=sensor_model)  # fmt: skip
             if out_dir is not None and (out_dir / "objects.csv").exists():
                 files["objects.csv"] = (out_dir / "objects.csv").read_text()
     except Exception as exc:  # a run that raises is a failed point, not a failed sweep
@@ -157,7 +161,7 @@ def _save_files(out_dir: Path, result: PointResult) -> None:
         (folder / name).write_text(text)
 
 
-def _check_same_sweep(out_dir: Path, resolved: ResolvedSweep) -> None:
+def _check_same_sweep(out_dir: Path, resolved: ResolvedSweep, fidelity: str) -> None:
     """Refuse to mix rows of a different base scenario, duration or controller set into DIR."""
     path = out_dir / "sweep.json"
     if not path.exists():
@@ -171,7 +175,9 @@ def _check_same_sweep(out_dir: Path, resolved: ResolvedSweep) -> None:
             f"{out_dir}: holds results of a different sweep (base scenario, duration_s, set or "
             f"controllers changed since {old.get('sweep_file')}); use a new output folder"
         )
-
+    if old.get("fidelity", "full") != fidelity and (out_dir / "results.csv").exists():
+        raise SweepError(f"fidelity: {out_dir} holds {old.get('fidelity', 'full')} results; resume it with "
+                         f"--fidelity {old.get('fidelity', 'full')} or use a new output folder")
 
 def run_sweep(
     sweep_file: str | Path,
@@ -182,6 +188,9 @@ def run_sweep(
     *,
     retry_failed: bool = False,
     max_points: int | None = None,
+    fidelity: str = "fast",
+    full_checks: int = 2,
+    cache_dir: Path | None = None,
 ) -> dict[str, Any]:
     """Run (or resume) a sweep into ``out_dir``; returns counts and paths.
 
@@ -189,16 +198,21 @@ def run_sweep(
     ``workers`` (default: one per CPU) single-threaded processes.
     ``retry_failed`` runs points recorded as failed again; ``max_points`` runs at
     most that many of the unfinished points (a partial sweep, resumed later).
-    Returns ``{"points", "skipped", "ran", "ok", "failed", "results", "sweep_json"}``.
+    ``fidelity``: "fast" (default; camera controllers judged by the calibrated sensor model, see
+    ``citysim.sweep.fidelity``) or "full"; in fast mode ``full_checks`` of the points run are
+    re-run in full fidelity and compared (DIR/fidelity_check.json, counts["check"]).
+    Returns ``{"points", "skipped", "ran", "ok", "failed", "results", "sweep_json"}`` (+ "check").
     Raises SweepError (a ValueError) for a bad sweep file, folder or scheduler.
     """
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise SweepError(f"workers: a whole number >= 1, got {workers!r}")
+    if fidelity not in FIDELITIES:
+        raise SweepError(f"fidelity: unknown {fidelity!r}; valid: {', '.join(FIDELITIES)}")
     resolved = load_sweep(sweep_file)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    _check_same_sweep(out_dir, resolved)
-    (out_dir / "sweep.json").write_text(json.dumps(resolved.to_json(), indent=2) + "\n")
+    _check_same_sweep(out_dir, resolved, fidelity)
+    (out_dir / "sweep.json").write_text(json.dumps({**resolved.to_json(), "fidelity": fidelity}, indent=2) + "\n")
 
     controllers = resolved.controller_labels
     results = ResultsFile(out_dir / "results.csv", resolved.axis_names)
@@ -230,30 +244,50 @@ def run_sweep(
             record(PointResult(point.point_id, failed_rows(point, controllers, str(exc))))
 
     if runnable:
-        _run_on_dask(runnable, controllers, resolved.spec.save_objects, scheduler, workers,
-                     progress, record)  # fmt: skip
+        tasks = _tasks(runnable, fidelity, full_checks, cache_dir, progress)
+        checks = _run_on_dask(tasks, controllers, resolved.spec.save_objects, scheduler, workers,
+                              progress, record)  # fmt: skip
+        if checks:
+            report = check_report(checks)
+            counts["check"] = {"points": len(checks), "cells": report["cells"], "cells_pass": report["cells_pass"],
+                               "file": write_check(out_dir, report)}  # fmt: skip
     return {**counts, "results": out_dir / "results.csv", "sweep_json": out_dir / "sweep.json"}
 
 
-def _run_on_dask(runnable, controllers, save_objects, scheduler, workers, progress, record) -> None:
+def _tasks(runnable, fidelity: str, full_checks: int, cache_dir, progress: bool) -> list[tuple]:
+    """(point, scenario, fidelity, sensor model, is_check) for every run to send to Dask."""
+    if fidelity == "full":
+        return [(point, scenario, "full", None, False) for point, scenario in runnable]
+    models = sensor_models([scenario for _, scenario in runnable], cache_dir, progress)
+    tasks = [(point, scenario, "fast", model, False) for (point, scenario), model in zip(runnable, models, strict=True)]
+    # a point without camera controllers runs alike in both fidelities: nothing to check
+    camera = [i for i, model in enumerate(models) if model is not None]
+    checked = [camera[i] for i in check_points(len(camera), full_checks)]
+    return tasks + [(runnable[i][0], runnable[i][1], "full", None, True) for i in checked]
+
+
+def _run_on_dask(tasks, controllers, save_objects, scheduler, workers, progress, record) -> list[tuple]:
+    """Run the tasks; record each point's rows; the (point_id, full, fast) summaries of the checks."""
     from distributed import as_completed
     from tqdm import tqdm
 
     handle = connect(scheduler, workers)
+    summaries: dict[tuple[str, bool], dict] = {}
     try:
-        points_by_key = {}
+        tasks_by_key = {}
         futures = []
-        for point, scenario in runnable:
+        for task in tasks:
+            point, scenario, fidelity, model, is_check = task
             fut = handle.client.submit(
-                run_point, point, scenario, list(controllers), save_objects,
-                key=f"citysim-point-{point.point_id}-{time.time_ns()}", pure=False,
+                run_point, point, scenario, list(controllers), save_objects and not is_check, fidelity, model,
+                key=f"citysim-point-{point.point_id}-{fidelity}-{time.time_ns()}", pure=False,
             )  # fmt: skip
-            points_by_key[fut.key] = point
+            tasks_by_key[fut.key] = task
             futures.append(fut)
         bar = tqdm(total=len(futures), desc="sweep points", unit="point", disable=not progress)
         with bar:
             for fut in as_completed(futures):
-                point = points_by_key[fut.key]
+                point, _, _, _, is_check = tasks_by_key[fut.key]
                 try:
                     result = fut.result()
                 except Exception as exc:  # the worker died or the task could not be sent
@@ -261,8 +295,13 @@ def _run_on_dask(runnable, controllers, save_objects, scheduler, workers, progre
                         point.point_id,
                         failed_rows(point, controllers, f"{type(exc).__name__}: {exc}"),
                     )
-                record(result)
+                if "summary.json" in result.files:
+                    summaries[(point.point_id, is_check)] = json.loads(result.files["summary.json"])
+                if not is_check:
+                    record(result)
                 fut.release()
                 bar.update(1)
     finally:
         handle.close()
+    return [(pid, full, summaries[(pid, False)]) for (pid, is_check), full in summaries.items()
+            if is_check and (pid, False) in summaries]  # fmt: skip

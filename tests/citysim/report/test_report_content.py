@@ -32,7 +32,13 @@ from citysim.report.common import (
 )
 from citysim.report.html import write_report
 from citysim.report.lag_cdf import draw_lag_cdf, lag_groups
-from citysim.report.run_plots import RUN_PLOTS, TRAFFIC_PLOTS, draw_lamp_levels, level_data, plot_run
+from citysim.report.run_plots import (
+    RUN_PLOTS,
+    TRAFFIC_PLOTS,
+    draw_lamp_levels,
+    level_data,
+    plot_run,
+)
 from citysim.report.runfacts import (
     RunFacts,
     load_summary,

@@ -26,7 +26,7 @@ def test_year_writes_annual_figures_plot_and_report(toy_file, tmp_path, capsys):
     always_on = result["controllers"]["always_on"]
     # two 60 W lamps over every dark hour of Berlin's 2025
     assert always_on["energy_kwh_per_year"] == pytest.approx(0.120 * result["dark_hours_per_year"], rel=1e-9)
-    assert result["nights_with_darkness"] == 365 and result["fidelity"] == "full"
+    assert result["nights_with_darkness"] == 365 and result["fidelity"] == "fast"  # the default
     assert result["hour_runs"] == len(result["table"]["runs"]) == 1 + len(result["table"]["idle"])
     assert (out / "plots" / "monthly_energy.png").stat().st_size > 5000
     report = (out / "report.html").read_text()

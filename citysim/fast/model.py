@@ -1,0 +1,241 @@
+"""The sensor model: what the real detector reports about the agents a camera may see.
+
+Fitted by ``fit_sensor_model`` from calibration records (``citysim.fast.records``: every judged
+frame of full-fidelity render-and-detect, with the candidates of ``citysim.fast.geometry`` and
+whether the detector found each), it holds:
+
+* ``p_hit``: P(a candidate is detected as a target in a judged frame | kind, forward distance,
+  bearing, light level at the agent, young background, speed), binned. Sparse cells are shrunk
+  toward their coarser parent (kind x distance x bearing x light, then kind x distance, then
+  kind), each with ``PRIOR_FRAMES`` pseudo-frames, so a cell seen twice is not taken at its word.
+* ``persistence``: per kind, the lag-1 correlation of hits of one candidate in consecutive
+  frames (misses come in streaks: a person in a dark gap is missed for many frames together).
+  Fast mode draws hits from a two-state Markov chain with the cell's P and this correlation.
+* ``class_given_hit``: the detector class a detected kind is reported as (its lamps ahead and
+  margins depend on it).
+* false alarms (insects, rain, branches): per judged frame with none running, the probability
+  one starts (``fa_start_p``, by the camera's own lamp lit or dim), how many judged frames it
+  lasts, and where it is reported (distance, box, class), as samples.
+* ``p_regions_idle``: P(a frame with no candidate holds some moving region) (keeps the camera
+  judged every frame, as in full fidelity).
+* the threshold baselines' trigger: samples of the largest foreground region's share of the
+  frame, per condition (nothing in view by light level, or the nearest candidate's kind and
+  distance bin).
+
+Saved as JSON (small tables and capped sample lists).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from citysim.config.kinds import AGENT_KINDS, DETECTOR_CLASSES
+
+KINDS = tuple(AGENT_KINDS)
+#: Bin edges; a value falls in bin i when edges[i] <= value < edges[i + 1] (the last bin is open).
+DISTANCE_EDGES_M = (0.0, 5.0, 8.0, 11.0, 14.0, 17.0, 20.0, 23.0, 26.0)
+BEARING_EDGES_DEG = (0.0, 10.0, 20.0, 30.0)
+SPEED_EDGES_MPS = (0.0, 0.5, 2.5, 6.0)
+#: A lamp at or above this level counts as lit (the light bin).
+LIT_LEVEL = 0.5
+#: A background model younger than this many frames since its reset counts as young.
+YOUNG_FRAMES = 15
+PRIOR_FRAMES = 4.0
+#: Sample lists are capped at this many values (a deterministic, evenly spaced subset).
+MAX_SAMPLES = 2000
+#: Background ages (frames since its reset) the threshold samples are kept apart by: a young
+#: MOG2 model reports big foreground regions on its own, and how often a background is young
+#: depends on how often the lamps in view switch, which differs between controllers.
+AGE_EDGES_FRAMES = (0, 15, 90)
+#: Bumped whenever the model's meaning changes, so cached models are refitted.
+MODEL_VERSION = 3
+
+
+def bin_of(values: np.ndarray, edges: tuple[float, ...]) -> np.ndarray:
+    return np.clip(np.searchsorted(np.asarray(edges), np.asarray(values, dtype=np.float64), side="right") - 1,
+                   0, len(edges) - 1)  # fmt: skip
+
+
+def cell_of(kind: np.ndarray, forward_m, bearing_rad, light, young, speed_mps) -> tuple[np.ndarray, ...]:
+    """The p_hit cell indices (kind, distance, bearing, light, young, speed) of candidate rows."""
+    return (np.asarray(kind, dtype=np.int64), bin_of(forward_m, DISTANCE_EDGES_M),
+            bin_of(np.degrees(np.abs(bearing_rad)), BEARING_EDGES_DEG),
+            (np.asarray(light) >= LIT_LEVEL).astype(np.int64), np.asarray(young, dtype=np.int64),
+            bin_of(speed_mps, SPEED_EDGES_MPS))  # fmt: skip
+
+
+def table_shape() -> tuple[int, ...]:
+    return (len(KINDS), len(DISTANCE_EDGES_M), len(BEARING_EDGES_DEG), 2, 2, len(SPEED_EDGES_MPS))
+
+
+def background_age_bin(learning_rate: float | None) -> int:
+    """The ``AGE_EDGES_FRAMES`` bin of a background fed at MOG2's automatic ``learning_rate``
+    (1 / min(2 (n + 1), history) after n frames; 1 for the first frame, None: unknown, young)."""
+    if learning_rate is None or learning_rate >= 1.0:
+        return 0
+    frames_before = 0.5 / learning_rate - 1.0
+    return int(bin_of(np.array([frames_before]), tuple(float(e) for e in AGE_EDGES_FRAMES))[0])
+
+
+def threshold_condition(kind: int, forward_m: float, lit: bool, age_bin: int | None = None) -> str:
+    """The key of the threshold samples: the nearest candidate's kind and distance bin, or 'none'
+    and the light; with ``age_bin`` the finer key that also holds the background's age."""
+    if kind < 0:
+        key = f"none/{int(lit)}"
+    else:
+        key = f"{KINDS[kind]}/{int(bin_of(np.array([forward_m]), DISTANCE_EDGES_M)[0])}"
+    return key if age_bin is None else f"{key}/age{age_bin}"
+
+
+@dataclass
+class SensorModel:
+    """A fitted sensor model (see the module docstring); ``key`` is the hash it is cached by."""
+
+    key: str
+    p_hit: list  # nested lists of table_shape()
+    persistence: dict[str, float]
+    class_given_hit: dict[str, list[float]]  # kind -> P over DETECTOR_CLASSES
+    fa_start_p: list[float]  # [dim, lit] of the camera's own lamp
+    fa_length_frames: list[int]
+    fa_reports: list[list[float]]  # [distance_m, x, y, w, h, class index]
+    p_regions_idle: list[float]  # [dim, lit]
+    area_fraction: dict[str, list[float]]  # threshold condition -> samples of the largest region's share
+    frames: int = 0  # judged camera frames it was fitted on
+    candidate_frames: int = 0
+    fa_per_camera_hour: float = 0.0  # false alarms started per camera-hour of calibration
+
+    def p_hit_array(self) -> np.ndarray:
+        return np.asarray(self.p_hit, dtype=np.float64)
+
+    def save(self, path: Path) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps({"version": MODEL_VERSION, **asdict(self)}))
+        tmp.replace(path)  # never half-written
+
+    @classmethod
+    def load(cls, path: Path) -> SensorModel:
+        data = json.loads(Path(path).read_text())
+        if data.pop("version", None) != MODEL_VERSION:
+            raise ValueError(f"{path}: sensor model of another version; recalibrate (citysim calibrate)")
+        return cls(**data)
+
+
+def _shrunk(hits: np.ndarray, n: np.ndarray, parent: np.ndarray) -> np.ndarray:
+    return (hits + PRIOR_FRAMES * parent) / (n + PRIOR_FRAMES)
+
+
+def fit_p_hit(cells: tuple[np.ndarray, ...], hit: np.ndarray) -> np.ndarray:
+    """The p_hit table from candidate rows' cells and hits, each level shrunk toward its parent."""
+    shape = table_shape()
+    hits = np.zeros(shape)
+    n = np.zeros(shape)
+    np.add.at(hits, cells, hit.astype(np.float64))
+    np.add.at(n, cells, 1.0)
+    target = np.array([AGENT_KINDS[k].is_target for k in KINDS])
+    # a kind never seen in calibration falls back to the pooled rate of its group (targets or not)
+    pooled = np.zeros(len(KINDS))
+    for group in (True, False):
+        sel = target == group
+        total = n[sel].sum()
+        pooled[sel] = hits[sel].sum() / total if total else 0.0
+    kind_p = _shrunk(hits.sum(axis=(1, 2, 3, 4, 5)), n.sum(axis=(1, 2, 3, 4, 5)), pooled)
+    dist_p = _shrunk(hits.sum(axis=(2, 3, 4, 5)), n.sum(axis=(2, 3, 4, 5)), kind_p[:, None])
+    view_p = _shrunk(hits.sum(axis=(4, 5)), n.sum(axis=(4, 5)), dist_p[:, :, None, None])
+    return _shrunk(hits, n, view_p[..., None, None])
+
+
+def fit_persistence(rows: dict[str, np.ndarray], p: np.ndarray) -> dict[str, float]:
+    """Per kind, the lag-1 correlation of (hit - p) / sd over consecutive frames of one candidate."""
+    order = np.lexsort((rows["frame"], rows["object_id"], rows["camera"]))
+    cam, obj, frame = rows["camera"][order], rows["object_id"][order], rows["frame"][order]
+    z = (rows["hit"][order] - p[order]) / np.sqrt(np.clip(p[order] * (1 - p[order]), 1e-6, None))
+    next_ok = (cam[1:] == cam[:-1]) & (obj[1:] == obj[:-1]) & (frame[1:] == frame[:-1] + 1)
+    kind = rows["kind"][order][:-1]
+    out = {}
+    for k, name in enumerate(KINDS):
+        sel = next_ok & (kind == k)
+        if sel.sum() < 10:
+            out[name] = 0.0
+            continue
+        a, b = z[:-1][sel], z[1:][sel]
+        out[name] = float(np.clip(np.mean(a * b) / max(np.sqrt(np.mean(a * a) * np.mean(b * b)), 1e-9), 0.0, 0.95))
+    return out
+
+
+def fit_classes(rows: dict[str, np.ndarray]) -> dict[str, list[float]]:
+    out = {}
+    for k, name in enumerate(KINDS):
+        counts = np.full(len(DETECTOR_CLASSES), 0.0)
+        counts[DETECTOR_CLASSES.index(AGENT_KINDS[name].detector_class)] += 0.5  # its own class, as a prior
+        sel = (rows["kind"] == k) & rows["hit"].astype(bool) & (rows["det_class"] >= 0)
+        np.add.at(counts, rows["det_class"][sel], 1.0)
+        out[name] = (counts / counts.sum()).tolist()
+    return out
+
+
+def _capped(values: np.ndarray) -> list:
+    values = np.asarray(values)
+    if len(values) > MAX_SAMPLES:
+        values = values[np.linspace(0, len(values) - 1, MAX_SAMPLES).round().astype(int)]
+    return values.tolist()
+
+
+def fit_false_alarms(frames: dict[str, np.ndarray], camera_hours: float) -> dict:
+    """False-alarm episodes: runs of consecutive judged frames of a camera with an unmatched target."""
+    order = np.lexsort((frames["frame"], frames["camera"]))
+    cam, fa = frames["camera"][order], frames["fa"][order].astype(bool)
+    lit = (frames["light"][order] >= LIT_LEVEL).astype(int)
+    prev_fa = np.concatenate([[False], fa[:-1] & (cam[1:] == cam[:-1])])
+    start = fa & ~prev_fa
+    eligible = ~(fa & prev_fa)  # a start is drawn on every frame not continuing an episode
+    start_p = [float(start[eligible & (lit == b)].sum() / max(1, (eligible & (lit == b)).sum())) for b in (0, 1)]
+    lengths, run = [], 0
+    for i in range(len(fa)):
+        if fa[i] and (run == 0 or cam[i] == cam[i - 1]):
+            run += 1
+        elif fa[i]:
+            lengths.append(run)
+            run = 1
+        elif run:
+            lengths.append(run)
+            run = 0
+    if run:
+        lengths.append(run)
+    reports = np.column_stack([frames["fa_distance_m"], frames["fa_box"], frames["fa_class"]])[order][fa]
+    regions = frames["regions"][order].astype(bool)
+    empty = ~frames["has_candidates"][order].astype(bool)
+    p_regions = [float(regions[empty & (lit == b)].mean()) if (empty & (lit == b)).any() else 0.0 for b in (0, 1)]
+    return {"fa_start_p": start_p, "fa_length_frames": _capped(np.array(lengths or [1], dtype=int)),
+            "fa_reports": _capped(reports) if len(reports) else [], "p_regions_idle": p_regions,
+            "fa_per_camera_hour": float(start.sum() / camera_hours) if camera_hours > 0 else 0.0}  # fmt: skip
+
+
+def fit_area_fractions(frames: dict[str, np.ndarray]) -> dict[str, list[float]]:
+    """Samples per condition, and per condition and background age (looked up first)."""
+    by_key: dict[str, list[float]] = {}
+    for k, d, lit, age, frac in zip(frames["near_kind"], frames["near_forward_m"], frames["light"],
+                                    frames["age_bin"], frames["area_fraction"].tolist(), strict=True):  # fmt: skip
+        for a in (None, int(age)):
+            by_key.setdefault(threshold_condition(int(k), float(d), bool(lit >= LIT_LEVEL), a), []).append(frac)
+    return {key: _capped(np.array(v)) for key, v in sorted(by_key.items())}
+
+
+def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray], camera_hours: float,
+                     key: str = "") -> SensorModel:  # fmt: skip
+    """Fit from candidate ``rows`` and judged ``frames`` (column arrays, see ``citysim.fast.records``)."""
+    if len(frames["camera"]) == 0:
+        raise ValueError("calibration: no judged camera frames to fit a sensor model on")
+    cells = cell_of(rows["kind"], rows["forward_m"], rows["bearing_rad"], rows["light"], rows["young"],
+                    rows["speed_mps"])  # fmt: skip
+    table = fit_p_hit(cells, rows["hit"])
+    p = table[cells] if len(rows["hit"]) else np.zeros(0)
+    return SensorModel(
+        key=key, p_hit=table.tolist(), persistence=fit_persistence(rows, p), class_given_hit=fit_classes(rows),
+        area_fraction=fit_area_fractions(frames), frames=int(len(frames["camera"])),
+        candidate_frames=int(len(rows["hit"])), **fit_false_alarms(frames, camera_hours),
+    )  # fmt: skip

@@ -1,0 +1,208 @@
+"""Calibration records: what the real detector did with every candidate of every judged frame.
+
+A calibration run is an ordinary full-fidelity run (rendered frames, the real detector) of a
+camera controller whose detectors are wrapped by ``RecordingSensors`` (each judged frame's
+learning rate and detections are kept, and the threshold baselines' whole-frame segmenter is
+run on the same frame) and with ``CalibrationRecorder`` among the collectors. The recorder
+matches the detector's target detections to the renderer's truth boxes (IoU >= 0.3, greedy, as
+``citysim.metrics.confusion`` does; an unmatched one standing on the ground near a candidate,
+3 m, or 20 m for one carrying a light, is that candidate's) and writes one row per candidate (``citysim.fast.geometry``)
+and one per judged frame: the columns ``citysim.fast.model.fit_sensor_model`` reads.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from citysim.config.kinds import DETECTOR_CLASSES
+from citysim.fast.geometry import CameraGeometry
+from citysim.fast.model import KINDS, YOUNG_FRAMES, background_age_bin
+from citysim.metrics.collector import Collector
+from citysim.metrics.confusion import greedy_match, iou_matrix
+from citysim.world.agents import AgentState
+
+IOU_MATCH = 0.3
+#: A target detection matching no truth box whose ground point is this near a candidate is that
+#: candidate's (its own light spot, a shadow, a part cut off), m; for an agent carrying a light
+#: (headlights, a flashlight) its beam on the ground reaches farther.
+NEAR_M = 3.0
+LIT_REACH_M = 20.0
+ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
+               "hit", "det_class")  # fmt: skip
+FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
+                 "regions", "near_kind", "near_forward_m", "area_fraction", "age_bin")  # fmt: skip
+
+
+def is_young(learning_rate: float | None) -> bool:
+    """Whether MOG2's automatic rate says its background is younger than ``YOUNG_FRAMES`` frames."""
+    return learning_rate is None or learning_rate >= 1.0 / (2 * (YOUNG_FRAMES + 1))
+
+
+class RecordingDetector:
+    """A real ``detector.Detector`` that keeps what it saw, plus a whole-frame threshold segmenter."""
+
+    def __init__(self, detector, threshold_segmenter):
+        self.inner = detector
+        self.threshold_segmenter = threshold_segmenter
+        self.last_rate: float | None = None
+        self.last_detections: list = []
+        self.last_area_fraction = 0.0
+
+    def __getattr__(self, name):  # camera, segmenter, tracker, last_regions, target_threshold...
+        return getattr(self.inner, name)
+
+    def reset_background(self) -> None:
+        self.inner.reset_background()
+        self.threshold_segmenter.reset()
+
+    def is_target(self, detections) -> bool:
+        return self.inner.is_target(detections)
+
+    def process(self, image: np.ndarray, learning_rate: float | None = None) -> list:
+        self.last_rate = learning_rate
+        self.last_detections = self.inner.process(image, learning_rate)
+        regions = self.threshold_segmenter.apply(image, learning_rate)
+        n_px = image.shape[0] * image.shape[1]
+        self.last_area_fraction = float(regions.areas_px.max()) / n_px if len(regions.areas_px) else 0.0
+        return self.last_detections
+
+
+class RecordingSensors:
+    """``ControlContext.sensors`` for a calibration run: real detectors, recorded."""
+
+    def __init__(self):
+        self.detectors_made: list[RecordingDetector] = []
+
+    def detectors(self, ctx, threshold: float) -> list[RecordingDetector]:
+        from detector.detector import Detector
+        from detector.general_model import default_model
+        from detector.segment import Segmenter, SegmenterParams
+
+        model = default_model()
+        fps = 1.0 / ctx.frame_period_s
+        self.detectors_made = [
+            RecordingDetector(Detector(site.camera, model=model, target_threshold=threshold),
+                              Segmenter(SegmenterParams(), fps=fps))
+            for site in ctx.street.lamps
+        ]  # fmt: skip
+        return self.detectors_made
+
+    def segmenters(self, ctx):
+        raise ValueError("calibration records a detector controller, not a threshold baseline")
+
+
+class CalibrationRecorder(Collector):
+    """Collector of a calibration run: candidate rows and judged-frame rows (column lists)."""
+
+    def __init__(self, geometry: CameraGeometry, sensors: RecordingSensors, fps: float, target_threshold: float = 0.5):
+        self.geometry = geometry
+        self.sensors = sensors
+        self.fps = fps
+        self.target_threshold = target_threshold
+        self.rows: dict[str, list] = {c: [] for c in ROW_COLUMNS}
+        self.frames: dict[str, list] = {c: [] for c in FRAME_COLUMNS}
+        self.agents: list[AgentState] = []
+        self.levels = np.zeros(geometry.n)
+        self._placed = None
+
+    def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
+        self.agents = list(agents)
+        self.levels = np.asarray(levels, dtype=np.float64).copy()
+        self._placed = None
+
+    def _candidates(self):
+        if self._placed is None:
+            cand = self.geometry.candidates(self.agents)
+            xs = np.array([a.x_m for a in self.agents], dtype=np.float64)
+            self._placed = (cand, self.geometry.light_at(xs, self.levels) if len(xs) else xs)
+        return self._placed
+
+    def on_frame(self, lamp_index: int, t_s: float, truth: Sequence, detections: Sequence | None) -> None:
+        if detections is None:
+            return  # not judged (the light in view was changing)
+        recorded = self.sensors.detectors_made[lamp_index]
+        frame = int(round(t_s * self.fps))
+        hits, fa = self._match(truth, detections)
+        cand, light = self._candidates()
+        idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
+        fa = self._near_candidates(lamp_index, idx, hits, fa)
+        young = is_young(recorded.last_rate)
+        for a_i in idx.tolist():
+            agent = self.agents[a_i]
+            det_class = hits.get(agent.object_id, -1)
+            for col, value in zip(ROW_COLUMNS, (lamp_index, frame, agent.object_id, KINDS.index(agent.cls),
+                                                cand.forward_m[a_i, lamp_index], cand.bearing_rad[a_i, lamp_index],
+                                                agent.speed_mps, light[a_i], young, det_class >= 0, det_class),
+                                  strict=True):  # fmt: skip
+                self.rows[col].append(value)
+        near = idx[np.argmin(cand.forward_m[idx, lamp_index])] if len(idx) else -1
+        fa_row = fa[0] if fa else None
+        values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, fa_row is not None,
+                  float(fa_row.features[3]) if fa_row is not None else np.nan,
+                  tuple(fa_row.box_px) if fa_row is not None else (0, 0, 0, 0),
+                  DETECTOR_CLASSES.index(fa_row.cls) if fa_row is not None else -1,
+                  len(recorded.inner.last_regions) > 0,
+                  KINDS.index(self.agents[near].cls) if near >= 0 else -1,
+                  float(cand.forward_m[near, lamp_index]) if near >= 0 else np.nan, recorded.last_area_fraction,
+                  background_age_bin(recorded.last_rate))  # fmt: skip
+        for col, value in zip(FRAME_COLUMNS, values, strict=True):
+            self.frames[col].append(value)
+
+    def _near_candidates(self, lamp_index: int, idx: np.ndarray, hits: dict[int, int], fa: list) -> list:
+        """Unmatched target detections that stand on the ground near a candidate are that candidate's
+        (a walker's light spot, a car's beam on the road ahead of it): a hit, not a false alarm."""
+        if not fa or not len(idx):
+            return fa
+        cam = self.geometry.cameras[lamp_index]
+        left = []
+        for d in fa:
+            x, y, w, h = d.box_px
+            ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]], dtype=np.float64))[0]
+            owner = None
+            if np.all(np.isfinite(ground)):
+                for a_i in idx.tolist():
+                    agent = self.agents[a_i]
+                    reach_m = LIT_REACH_M if agent.light_on else NEAR_M
+                    if agent.object_id not in hits and math.hypot(ground[0] - agent.x_m, ground[1] - agent.y_m) <= reach_m:
+                        owner = agent
+                        break
+            if owner is None:
+                left.append(d)
+            else:
+                hits[owner.object_id] = DETECTOR_CLASSES.index(d.cls)
+        return left
+
+    def _match(self, truth: Sequence, detections: Sequence) -> tuple[dict[int, int], list]:
+        """Truth object id -> detected class index of its target detection; unmatched target detections."""
+        targets = [d for d in detections if d.p_target >= self.target_threshold]
+        if not targets:
+            return {}, []
+        if not truth:
+            return {}, targets
+        iou = iou_matrix(np.array([(o.x, o.y, o.w, o.h) for o in truth]), np.array([d.box_px for d in targets]))
+        pairs = greedy_match(iou, IOU_MATCH)
+        matched = {c for _, c in pairs}
+        hits = {truth[r].object_id: DETECTOR_CLASSES.index(targets[c].cls) for r, c in pairs}
+        return hits, [d for j, d in enumerate(targets) if j not in matched]
+
+    def columns(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        rows = {c: np.asarray(v) for c, v in self.rows.items()}
+        for c in ("camera", "frame", "object_id", "kind", "det_class"):
+            rows[c] = rows[c].astype(np.int64).reshape(-1)
+        for c in ("forward_m", "bearing_rad", "speed_mps", "light"):
+            rows[c] = rows[c].astype(np.float64).reshape(-1)
+        rows["young"] = rows["young"].astype(bool).reshape(-1)
+        rows["hit"] = rows["hit"].astype(bool).reshape(-1)
+        frames = {c: np.asarray(v) for c, v in self.frames.items()}
+        frames["fa_box"] = frames["fa_box"].astype(np.float64).reshape(-1, 4)
+        return rows, frames
+
+
+def merge_columns(parts: Sequence[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Columns of several calibration runs as one; run i's frame numbers are shifted by i x 10^9 so
+    frames of different runs are never consecutive (rows and frames of a run shift alike)."""
+    shifted = [{**part, "frame": part["frame"] + i * 10**9} for i, part in enumerate(parts)]
+    return {key: np.concatenate([p[key] for p in shifted]) for key in shifted[0]}

@@ -1,0 +1,60 @@
+"""simpy process of fast mode: the lamp cameras judged by the sensor model instead of filmed.
+
+``sense`` takes the place of ``citysim.sim.cameras.film``: the same frame times (k / fps), the
+same choice of which cameras are judged (every camera every ``idle_frame_stride``-th frame; in
+between, those with an agent in their wider view, motion in their last judged frame, or a lamp
+in view ramping), and the same calls (``controller.on_frame``, then every collector's
+``on_frame``), but nothing is rendered: the controller's detectors are ``FastSensors``' stand-ins
+and the "frame" is a ``SensedFrame``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from citysim.control.lamps import Lamp, levels_at
+from citysim.fast.sensors import FastSensors, SensedFrame
+from citysim.metrics.collector import Collector
+
+
+def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collectors: Sequence[Collector]):
+    """simpy process: every camera frame at the cameras' frame rate, judged by the sensor model."""
+    env = night.env
+    fps = night.street.lamps[0].camera.fps
+    stride = night.scenario.simulation.idle_frame_stride
+    n = len(lamps)
+    watch = [list(range(max(0, i - 1), min(n, i + 2))) for i in range(n)]
+    k = 0
+    while True:
+        yield env.timeout(max(0.0, k / fps - env.now))
+        t = env.now
+        agents = night.agents
+        every = stride <= 1 or k % stride == 0
+        if not every and not agents and not _any_motion(controller, n) and not _any_ramping(lamps, t):
+            k += 1  # a still street with nothing moving in view: no camera is judged
+            continue
+        levels = levels_at(lamps, t)
+        sensors.observe(k, agents, levels)
+        for i in range(n):
+            if not (every or sensors.cand.awake[i] or controller.motion_seen(i)
+                    or any(lamps[j].is_ramping(t) for j in watch[i])):  # fmt: skip
+                continue
+            frame = SensedFrame(sensors, i)
+            detections = controller.on_frame(i, t, frame)
+            for collector in collectors:
+                collector.on_frame(i, t, frame.truth if detections is not None else (), detections)
+        k += 1
+
+
+def _any_motion(controller, n: int) -> bool:
+    return any(controller.motion_seen(i) for i in range(n))
+
+
+def _any_ramping(lamps: Sequence[Lamp], t_s: float) -> bool:
+    return any(lamp.is_ramping(t_s) for lamp in lamps)
+
+
+def fast_sensors(night, model) -> FastSensors:
+    """The night's sensor stand-ins: the model's draws from the night's per-camera streams."""
+    return FastSensors(model, night.street, night.camera_streams(), night.street.lamps[0].camera.fps)
+

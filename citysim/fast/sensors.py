@@ -1,0 +1,282 @@
+"""Fast mode's stand-ins for the detector and the threshold segmenter: no pixels, calibrated draws.
+
+``FastSensors`` is a ``ControlContext.sensors``: camera controllers build their per-camera
+``SensedDetector`` (the ``detector.Detector`` interface they use: ``process``, ``is_target``,
+``last_regions``, ``reset_background``, ``segmenter.automatic_learning_rate``, ``camera``,
+``tracker.is_confirmed``, ``target_threshold``) or ``SensedSegmenter`` (the threshold baselines'
+``apply`` / ``reset``) through it. The sense process (``citysim.fast.sense``) tells it the
+agents and lamp levels of each frame (``observe``) and passes a ``SensedFrame`` where a frame
+would be; each stand-in then draws what the real one would report from the ``SensorModel``.
+
+Draws come from one generator per camera (the night's camera streams), in the order frames are
+judged, so a seed gives the same detections bit for bit.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from citysim.config.kinds import DETECTOR_CLASSES
+from citysim.fast.geometry import CameraGeometry
+from citysim.fast.model import (
+    KINDS,
+    LIT_LEVEL,
+    SensorModel,
+    background_age_bin,
+    cell_of,
+    threshold_condition,
+)
+from citysim.fast.records import is_young
+from detector.detector import Detection
+from detector.segment import SegmenterParams
+
+#: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
+DRAWN_P_TARGET = 0.9
+#: Detector range, m: beyond it a candidate is not 'fully visible' truth for the confusion figures.
+DETECTOR_RANGE_M = 25.0
+
+
+@dataclass(frozen=True)
+class SensedTruth:
+    """A truth box as ``citysim.metrics.confusion`` reads it (attributes of a render TruthObject)."""
+
+    object_id: int
+    cls: str
+    x: int
+    y: int
+    w: int
+    h: int
+    fully_visible: bool
+
+
+class SensedFrame:
+    """What fast mode passes where a frame would be: the camera's shape and its candidates."""
+
+    def __init__(self, sensors: FastSensors, lamp_index: int):
+        cam = sensors.geometry.cameras[lamp_index]
+        self.shape = (cam.height_px, cam.width_px)
+        self.sensors = sensors
+        self.lamp_index = lamp_index
+        self._truth: tuple | None = None
+
+    @property
+    def truth(self) -> tuple:
+        if self._truth is None:
+            s, i = self.sensors, self.lamp_index
+            self._truth = tuple(
+                SensedTruth(a.object_id, a.cls, *s.box_px(i, j), bool(s.cand.forward_m[j, i] <= DETECTOR_RANGE_M))
+                for j, a in ((j, s.agents[j]) for j in s.candidates_of(i))
+            )  # fmt: skip
+        return self._truth
+
+
+class FastSensors:
+    """The sensor model applied to one night's agents: the factory camera controllers call."""
+
+    def __init__(self, model: SensorModel, street, rngs: list[np.random.Generator], fps: float):
+        self.model = model
+        self.geometry = CameraGeometry(street)
+        self.rngs = rngs
+        self.fps = fps
+        self.p_hit = model.p_hit_array()
+        self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
+        self.class_cdf = {k: np.cumsum(v) for k, v in model.class_given_hit.items()}
+        self.area_samples = {k: np.asarray(v) for k, v in model.area_fraction.items()}
+        self.frame_k = -1
+        self.agents: list = []
+        self.levels = np.zeros(self.geometry.n)
+        self.cand = self.geometry.candidates([])
+        self.light = np.zeros(0)
+        self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
+
+    def detectors(self, ctx, threshold: float) -> list[SensedDetector]:
+        return [SensedDetector(self, i, threshold) for i in range(self.geometry.n)]
+
+    def segmenters(self, ctx) -> list[SensedSegmenter]:
+        return [SensedSegmenter(self, i) for i in range(self.geometry.n)]
+
+    def observe(self, frame_k: int, agents: list, levels: np.ndarray) -> None:
+        """The agents and lamp levels of frame ``frame_k`` (before any camera of it is judged)."""
+        self.frame_k = frame_k
+        if agents is not self.agents:
+            self.agents = agents
+            self.cand = self.geometry.candidates(agents)
+            self._boxes = {}
+        self.levels = levels
+        xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
+        self.light = self.geometry.light_at(xs, levels) if len(agents) else xs
+
+    def candidates_of(self, lamp_index: int) -> np.ndarray:
+        return np.flatnonzero(self.cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, np.int64)
+
+    def box_px(self, lamp_index: int, agent_index: int) -> tuple[int, int, int, int]:
+        key = (lamp_index, agent_index)
+        if key not in self._boxes:
+            self._boxes[key] = self.geometry.box_px(lamp_index, self.agents[agent_index])
+        return self._boxes[key]
+
+    def lit(self, lamp_index: int) -> int:
+        return int(self.levels[lamp_index] >= LIT_LEVEL)
+
+
+class _LearningRate:
+    """The segmenter attribute camera controllers read: MOG2's automatic learning rate."""
+
+    def __init__(self, fps: float):
+        self.history_frames = SegmenterParams().history_frames(fps)
+
+    def automatic_learning_rate(self, frames_before: int) -> float:
+        if frames_before <= 0:
+            return 1.0
+        return 1.0 / min(2 * (frames_before + 1), self.history_frames)
+
+    def reset(self) -> None:
+        """Nothing to forget: a young background shows in the learning rate fast mode is given."""
+
+
+class SensedTracker:
+    """Per track, the last n frames' hits; confirmed at k of them (``detector.confirm.Tracker``'s
+    defaults: 2 of 6). A track unseen for more than 3 frames starts over, as a dropped one would."""
+
+    def __init__(self, k: int = 2, n: int = 6, max_missed_frames: int = 3):
+        self.k, self.n, self.max_missed = k, n, max_missed_frames
+        self.history: dict[int, tuple[int, deque]] = {}
+
+    def update(self, frame_k: int, track_id: int, hit: bool) -> None:
+        last_k, hist = self.history.get(track_id, (None, None))
+        if hist is None or frame_k - last_k > self.max_missed + 1:
+            hist = deque(maxlen=self.n)
+        hist.append(hit)
+        self.history[track_id] = (frame_k, hist)
+        if len(self.history) > 256:  # forget tracks long gone
+            self.history = {t: v for t, v in self.history.items() if frame_k - v[0] <= self.max_missed + 1}
+
+    def is_confirmed(self, track_id: int) -> bool:
+        entry = self.history.get(track_id)
+        return entry is not None and sum(entry[1]) >= self.k
+
+
+class SensedDetector:
+    """One camera's detector in fast mode: per judged frame, calibrated target draws per candidate
+    (a Markov chain per candidate: misses come in streaks) and false-alarm episodes."""
+
+    def __init__(self, sensors: FastSensors, lamp_index: int, threshold: float):
+        self.sensors = sensors
+        self.lamp_index = lamp_index
+        self.camera = sensors.geometry.cameras[lamp_index]
+        self.target_threshold = float(threshold)
+        self.segmenter = _LearningRate(sensors.fps)
+        self.tracker = SensedTracker()
+        self.rng = sensors.rngs[lamp_index]
+        self.last_regions: tuple = ()
+        self.previous: dict[int, tuple[int, bool]] = {}  # object id -> (frame, hit)
+        self.fa_left = 0
+        self.fa_report: tuple | None = None
+        self.fa_track = 0
+
+    def reset_background(self) -> None:
+        self.segmenter.reset()
+
+    def is_target(self, detections) -> bool:
+        return any(d.p_target >= self.target_threshold for d in detections)
+
+    def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
+        s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
+        idx = s.candidates_of(i)
+        detections = self._candidates(idx, k, is_young(learning_rate)) if len(idx) else []
+        fa = self._false_alarm(k)
+        if fa is not None:
+            detections.append(fa)
+        busy = len(idx) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]
+        self.last_regions = (True,) if busy else ()
+        return detections
+
+    def _candidates(self, idx: np.ndarray, k: int, young: bool) -> list[Detection]:
+        s, i = self.sensors, self.lamp_index
+        agents = [s.agents[j] for j in idx.tolist()]
+        kinds = np.array([KINDS.index(a.cls) for a in agents])
+        fwd, bearing = s.cand.forward_m[idx, i], s.cand.bearing_rad[idx, i]
+        speed = np.array([a.speed_mps for a in agents])
+        p = s.p_hit[cell_of(kinds, fwd, bearing, s.light[idx], np.full(len(idx), young), speed)]
+        rho = s.persistence[kinds]
+        for n, a in enumerate(agents):
+            prev = self.previous.get(a.object_id)
+            if prev is not None and prev[0] == k - 1:  # the chain's step from the last frame's draw
+                p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
+        hits = self.rng.random(len(agents)) < p
+        out = []
+        for n, a in enumerate(agents):
+            hit = bool(hits[n])
+            self.previous[a.object_id] = (k, hit)
+            self.tracker.update(k, a.object_id, hit)
+            if hit:
+                cls = DETECTOR_CLASSES[int(np.searchsorted(s.class_cdf[a.cls], self.rng.random(), side="right"))
+                                       if a.cls in s.class_cdf else 0]  # fmt: skip
+                out.append(_detection(s.box_px(i, int(idx[n])), float(fwd[n]), cls, a.object_id))
+        if len(self.previous) > 512:
+            self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
+        return out
+
+    def _false_alarm(self, k: int) -> Detection | None:
+        model = self.sensors.model
+        if self.fa_left == 0 and model.fa_reports:
+            if self.rng.random() < model.fa_start_p[self.sensors.lit(self.lamp_index)]:
+                lengths = model.fa_length_frames
+                self.fa_left = int(lengths[int(self.rng.integers(len(lengths)))])
+                self.fa_report = tuple(model.fa_reports[int(self.rng.integers(len(model.fa_reports)))])
+                self.fa_track -= 1  # negative ids: never an agent's
+        if self.fa_left == 0:
+            return None
+        self.fa_left -= 1
+        distance_m, x, y, w, h, cls = self.fa_report
+        self.tracker.update(k, self.fa_track, True)
+        return _detection((int(x), int(y), int(w), int(h)), distance_m, DETECTOR_CLASSES[int(cls)], self.fa_track)
+
+
+def _detection(box_px, distance_m: float, cls: str, track_id: int) -> Detection:
+    features = np.array([0.0, 0.0, 0.0, distance_m, 0.0, 0.0])
+    probabilities = np.array([1.0 - DRAWN_P_TARGET if c == "noise" else 0.0 for c in DETECTOR_CLASSES])
+    probabilities[DETECTOR_CLASSES.index(cls)] += DRAWN_P_TARGET if cls != "noise" else 0.0
+    return Detection(tuple(box_px), features, cls, probabilities, DRAWN_P_TARGET, track_id)
+
+
+class _Areas:
+    """The part of ``detector.segment.Regions`` the threshold baselines read."""
+
+    def __init__(self, areas_px: np.ndarray):
+        self.areas_px = areas_px
+
+    def __len__(self) -> int:
+        return len(self.areas_px)
+
+
+class SensedSegmenter(_LearningRate):
+    """One camera's whole-frame segmenter for the threshold baselines: per judged frame, the
+    largest region's share of the frame drawn from calibration frames of the same condition."""
+
+    def __init__(self, sensors: FastSensors, lamp_index: int):
+        super().__init__(sensors.fps)
+        self.sensors = sensors
+        self.lamp_index = lamp_index
+        self.rng = sensors.rngs[lamp_index]
+
+    def apply(self, frame: SensedFrame, learning_rate: float | None = None) -> _Areas:
+        s, i = self.sensors, self.lamp_index
+        idx = s.candidates_of(i)
+        if len(idx):
+            near = int(idx[np.argmin(s.cand.forward_m[idx, i])])
+            kind, forward_m, lit = KINDS.index(s.agents[near].cls), float(s.cand.forward_m[near, i]), True
+        else:
+            kind, forward_m, lit = -1, 0.0, bool(s.lit(i))
+        # this background age's samples where calibration saw the condition at that age, else any age's
+        samples = s.area_samples.get(threshold_condition(kind, forward_m, lit, background_age_bin(learning_rate)))
+        if samples is None:
+            samples = s.area_samples.get(threshold_condition(kind, forward_m, lit))
+        if samples is None or not len(samples):
+            return _Areas(np.zeros(0))
+        fraction = float(samples[int(self.rng.integers(len(samples)))])
+        n_px = frame.shape[0] * frame.shape[1]
+        return _Areas(np.array([fraction * n_px]) if fraction > 0 else np.zeros(0))

@@ -1,0 +1,143 @@
+"""Calibrate a scenario's sensor model (``citysim.fast``) from full-fidelity render-and-detect.
+
+``calibrate`` runs the scenario's street, cameras and environment in full fidelity under
+``CALIBRATION_CONTROLLER`` for ``runs`` nights of ``duration_s`` on seeds set aside for it
+(``CALIBRATION_SEED_BASE + i``; validation never uses them), records what the real detector did
+with every candidate (``citysim.fast.records``), fits the model and caches it in ``cache_dir``
+under a hash of what it depends on: the placed cameras and poles, the street and its scenery,
+the environment, the dim level, the idle-frame stride, the traffic kinds, the detector's model
+file and the calibration settings. ``sensor_model_for`` loads the cached model or calibrates.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import multiprocessing as mp
+import queue
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from tqdm import tqdm
+
+from citysim.config.kinds import TARGET_KINDS
+from citysim.config.scenario import ControllerSpec, Scenario, override
+from citysim.fast.geometry import CameraGeometry
+from citysim.fast.model import MODEL_VERSION, SensorModel, fit_sensor_model
+from citysim.fast.records import CalibrationRecorder, RecordingSensors, merge_columns
+from citysim.sim.loop import run_controller
+from citysim.world.street import build_street
+
+CALIBRATION_CONTROLLER = "detector_confirmed"
+#: Calibration runs use seeds CALIBRATION_SEED_BASE + i: far from any scenario's own seed.
+CALIBRATION_SEED_BASE = 900_000_000
+DEFAULT_DURATION_S = 120.0
+DEFAULT_RUNS = 2
+#: Calibration nights carry this many times the scenario's target traffic: more candidates per
+#: rendered frame (a rendered second costs the same with 3 people in view as with 1). It crowds
+#: the street a little more than the scenario does; validation is where that would show.
+TRAFFIC_FACTOR = 3.0
+
+
+def default_cache_dir() -> Path:
+    """``.cache/sensor_models`` in the project folder (git ignores it)."""
+    return Path(__file__).resolve().parents[2] / ".cache" / "sensor_models"
+
+
+def calibration_seeds(runs: int) -> list[int]:
+    return [CALIBRATION_SEED_BASE + i for i in range(runs)]
+
+
+def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
+    """A hash of everything the sensor model depends on (not the traffic's rates, not the seed)."""
+    from detector.general_model import GENERAL_MODEL_PATH
+
+    street = build_street(scenario)
+    parts = {
+        "version": MODEL_VERSION,
+        "cameras": [site.camera.model_dump(mode="json") for site in street.lamps],
+        "poles": [[site.x_m, site.y_m, site.pole_height_m] for site in street.lamps],
+        "street": scenario.street.model_dump(mode="json"),
+        "environment": scenario.environment.model_dump(mode="json"),
+        "dim_level": scenario.lamps.luminaire.dim_level,
+        "idle_frame_stride": scenario.simulation.idle_frame_stride,
+        "kinds": sorted(scenario.traffic.reported_kinds()),
+        "detector_model_sha256": hashlib.sha256(GENERAL_MODEL_PATH.read_bytes()).hexdigest(),
+        "calibration": {"duration_s": duration_s, "runs": runs, "controller": CALIBRATION_CONTROLLER},
+    }
+    return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def model_path(scenario: Scenario, cache_dir: Path | None, duration_s: float, runs: int) -> Path:
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    return folder / f"{scenario.name}-{calibration_key(scenario, duration_s, runs)}.json"
+
+
+def calibration_scenario(scenario: Scenario, seed: int, duration_s: float) -> Scenario:
+    """The scenario on a calibration seed, ``TRAFFIC_FACTOR`` times its target traffic."""
+    classes = scenario.traffic.classes
+    updates = {f"traffic.classes.{kind}.rate_per_hour": getattr(classes, kind).rate_per_hour * TRAFFIC_FACTOR
+               for kind in TARGET_KINDS}  # fmt: skip
+    return override(scenario, {"seed": seed, "duration_s": duration_s, **updates})
+
+
+def record_run(scenario: Scenario, seed: int, duration_s: float, on_progress=None):
+    """One full-fidelity calibration night: its candidate rows and judged-frame rows."""
+    night_scenario = calibration_scenario(scenario, seed, duration_s)
+    street = build_street(night_scenario)
+    sensors = RecordingSensors()
+    recorder = CalibrationRecorder(CameraGeometry(street), sensors, street.lamps[0].camera.fps)
+    run_controller(night_scenario, ControllerSpec(name=CALIBRATION_CONTROLLER), sensors=sensors,
+                   observers=[recorder], on_progress=on_progress)  # fmt: skip
+    return recorder.columns()
+
+
+def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: float = DEFAULT_DURATION_S,
+              runs: int = DEFAULT_RUNS, progress: bool = True, workers: int = 2) -> tuple[SensorModel, Path]:  # fmt: skip
+    """Render-and-detect ``runs`` calibration nights, fit the sensor model, cache it; (model, path)."""
+    path = model_path(scenario, cache_dir, duration_s, runs)
+    bar = tqdm(total=duration_s * runs, unit="sim s", desc=f"calibrating {scenario.name} (full fidelity)",
+               disable=not progress, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]")
+    parts = _record_runs(scenario, duration_s, runs, workers, bar)
+    bar.close()
+    rows = merge_columns([p[0] for p in parts])
+    frames = merge_columns([p[1] for p in parts])
+    camera_hours = duration_s * runs * len(build_street(scenario).lamps) / 3600.0
+    model = fit_sensor_model(rows, frames, camera_hours, key=path.stem)
+    model.save(path)
+    return model, path
+
+
+def sensor_model_for(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: float = DEFAULT_DURATION_S,
+                     runs: int = DEFAULT_RUNS, progress: bool = True, workers: int = 2) -> SensorModel:  # fmt: skip
+    """The scenario's cached sensor model, calibrated now (with a progress bar) if there is none."""
+    path = model_path(scenario, cache_dir, duration_s, runs)
+    if path.exists():
+        try:
+            return SensorModel.load(path)
+        except (ValueError, KeyError, TypeError):
+            pass  # another version or a damaged file: calibrate again
+    return calibrate(scenario, cache_dir, duration_s=duration_s, runs=runs, progress=progress, workers=workers)[0]
+
+
+def _record_worker(args):
+    scenario, seed, duration_s, progress_queue = args
+    return record_run(scenario, seed, duration_s, on_progress=progress_queue.put if progress_queue else None)
+
+
+def _record_runs(scenario: Scenario, duration_s: float, runs: int, workers: int, bar) -> list:
+    """The calibration nights, in parallel processes when ``workers`` > 1 (results in seed order)."""
+    seeds = calibration_seeds(runs)
+    if workers <= 1 or runs == 1:
+        return [record_run(scenario, seed, duration_s, on_progress=bar.update) for seed in seeds]
+    with mp.Manager() as manager:
+        q = manager.Queue()
+        ctx = mp.get_context("spawn")  # fresh interpreters: no forked OpenCV/pymunk state
+        with ProcessPoolExecutor(max_workers=min(workers, runs), mp_context=ctx) as pool:
+            futures = [pool.submit(_record_worker, (scenario, seed, duration_s, q)) for seed in seeds]
+            while not all(f.done() for f in futures):
+                try:
+                    bar.update(q.get(timeout=0.2))
+                except queue.Empty:
+                    pass
+            return [f.result() for f in futures]

@@ -1,0 +1,81 @@
+"""Fast mode runs: the sensor model drives the camera controllers, deterministically per seed."""
+
+from __future__ import annotations
+
+import pytest
+
+from citysim.config.scenario import ControllerSpec, scenario_from_mapping
+from citysim.sim.loop import RunError, run_controller
+from tests.citysim.fast.synthetic import constant_model, tiny_scenario
+
+
+@pytest.fixture(scope="module")
+def scenario():
+    return scenario_from_mapping(tiny_scenario())
+
+
+def fast(scenario, name: str, model, **spec) -> dict:
+    return run_controller(scenario, ControllerSpec(name=name, **spec), fidelity="fast", sensor_model=model)
+
+
+def triggers(summary: dict) -> int:
+    return sum(t["triggers"] for t in summary["lamp_triggers"])
+
+
+def test_same_seed_same_summary_and_another_seed_another(scenario):
+    model = constant_model(0.6, fa_start_p=0.01)
+    first = fast(scenario, "detector_located", model)
+    again = fast(scenario, "detector_located", model)
+    assert first == again
+    other = fast(scenario.model_copy(update={"seed": scenario.seed + 1}), "detector_located", model)
+    assert other != first
+
+
+@pytest.mark.parametrize("name", ["detector", "detector_confirmed", "detector_network", "detector_located"])
+def test_detector_controllers_light_only_when_the_model_detects(scenario, name):
+    blind = fast(scenario, name, constant_model(0.0))
+    sharp = fast(scenario, name, constant_model(1.0))
+    assert triggers(blind) == 0 and blind["detection"]["tp"] == 0
+    assert triggers(sharp) > 0
+    # a perfect sensor leaves far fewer people walking into a dim zone than a blind one
+    assert sharp["lit_on_entry_rate"] > blind["lit_on_entry_rate"]
+
+
+def test_false_alarms_light_lamps_with_nobody_there(scenario):
+    empty = scenario_from_mapping(tiny_scenario(traffic={"classes": {}}))
+    quiet = fast(empty, "detector_confirmed", constant_model(1.0, fa_start_p=0.0))
+    noisy = fast(empty, "detector_confirmed", constant_model(1.0, fa_start_p=0.05))
+    assert triggers(quiet) == 0 and quiet["false_on_time_s"] == 0.0
+    assert triggers(noisy) > 0 and noisy["false_on_time_s"] > 0.0
+
+
+def test_threshold_baselines_trigger_on_the_drawn_region_share(scenario):
+    # every judged frame reports a region of 1 % of the frame: above 0.5 %, below 5 %
+    model = constant_model(0.0, area_fraction=0.01)
+    assert triggers(fast(scenario, "threshold_05", model)) > 0
+    assert triggers(fast(scenario, "threshold_5", model)) == 0
+
+
+def test_light_controllers_are_identical_in_both_fidelities(scenario):
+    model = constant_model(0.5)
+    for name in ("always_on", "pir", "oracle"):
+        full = run_controller(scenario, ControllerSpec(name=name))
+        assert fast(scenario, name, model) == full
+
+
+def test_fast_mode_renders_nothing(scenario, monkeypatch):
+    from citysim.sim import night
+
+    def no_rendering(*args, **kwargs):
+        raise AssertionError("fast mode rendered a frame")
+
+    monkeypatch.setattr(night.Night, "renderer", no_rendering)
+    summary = fast(scenario, "detector_confirmed", constant_model(0.7))
+    assert triggers(summary) > 0
+
+
+def test_fast_without_a_model_and_an_unknown_fidelity_are_errors(scenario):
+    with pytest.raises(RunError, match="'fast' needs a calibrated sensor model"):
+        run_controller(scenario, ControllerSpec(name="detector"), fidelity="fast")
+    with pytest.raises(RunError, match="fidelity: unknown 'quick'; valid: full, fast"):
+        run_controller(scenario, ControllerSpec(name="detector"), fidelity="quick")

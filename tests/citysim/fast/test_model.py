@@ -1,0 +1,91 @@
+"""Fitting the sensor model on tiny synthetic calibration sets with known answers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from citysim.fast.model import (
+    KINDS,
+    PRIOR_FRAMES,
+    SensorModel,
+    background_age_bin,
+    cell_of,
+    fit_sensor_model,
+)
+from tests.citysim.fast.synthetic import frames, rows
+
+PED, CAR = KINDS.index("pedestrian"), KINDS.index("vehicle")
+
+
+def _cell(model: SensorModel, kind: int, forward_m: float, light: float = 0.2, speed_mps: float = 1.4) -> float:
+    return float(model.p_hit_array()[cell_of([kind], [forward_m], [0.0], [light], [False], [speed_mps])][0])
+
+
+def test_hit_rates_are_the_counts_shrunk_toward_the_coarser_cell():
+    # 400 pedestrian sightings at 9.5 m, 300 of them detected; 400 at 21.5 m, 40 detected
+    near = rows(400, forward_m=9.5, hit=np.arange(400) < 300, det_class=1)
+    far = rows(400, forward_m=21.5, hit=np.arange(400) < 40, det_class=1, object_id=2)
+    both = {k: np.concatenate([near[k], far[k]]) for k in near}
+    model = fit_sensor_model(both, frames(10), camera_hours=1.0)
+    # every level of the hierarchy holds the same 400 rows, so each shrinks toward a parent that is
+    # already near 0.75 (resp. 0.10): the cell is within 4 / 404 of the raw rate
+    assert _cell(model, PED, 9.5) == pytest.approx(0.75, abs=PRIOR_FRAMES / 400)
+    assert _cell(model, PED, 21.5) == pytest.approx(0.10, abs=PRIOR_FRAMES / 400)
+    # a distance bin never seen falls back to the kind's pooled rate (340 of 800)
+    assert _cell(model, PED, 3.0) == pytest.approx(340 / 800, abs=0.01)
+    # a target kind never seen (vehicles) takes the pooled rate of all targets
+    assert _cell(model, CAR, 9.5) == pytest.approx(340 / 800, abs=0.01)
+
+
+def test_streaks_of_misses_give_a_persistence_near_the_chain_that_made_them():
+    rng = np.random.default_rng(3)
+    p, rho, n = 0.5, 0.6, 6000
+    hit = np.zeros(n, dtype=bool)
+    hit[0] = True
+    for i in range(1, n):
+        q = p + rho * (1 - p) if hit[i - 1] else p * (1 - rho)
+        hit[i] = rng.random() < q
+    model = fit_sensor_model(rows(n, hit=hit, det_class=np.where(hit, 1, -1)), frames(10), camera_hours=1.0)
+    # 6000 frames: the lag-1 correlation's standard error is about 1 / sqrt(6000) = 0.013
+    assert model.persistence["pedestrian"] == pytest.approx(rho, abs=0.06)
+    assert model.persistence["vehicle"] == 0.0  # never seen: independent draws
+
+
+def test_false_alarm_episodes_are_counted_per_judged_frame():
+    # 1000 judged frames of one camera, dim: an episode of 3 frames starts every 100 frames
+    fa = (np.arange(1000) % 100) < 3
+    model = fit_sensor_model(rows(0), frames(1000, fa=fa, fa_distance_m=14.0), camera_hours=0.5)
+    assert model.fa_length_frames == [3] * 10
+    # 10 starts among the frames not already in an episode (1000 - 10 x 2 continuing frames)
+    assert model.fa_start_p[0] == pytest.approx(10 / 980)
+    assert model.fa_start_p[1] == 0.0  # no lit frames seen
+    assert model.fa_per_camera_hour == pytest.approx(20.0)
+    assert {r[0] for r in model.fa_reports} == {14.0}
+
+
+def test_detected_classes_and_threshold_areas_come_from_their_frames():
+    hit = np.arange(100) < 50
+    det = np.where(np.arange(100) < 40, 4, 3)  # vehicles reported as 'vehicle' 40 times, 'cyclist' 10
+    car_rows = rows(100, kind=CAR, hit=hit, det_class=np.where(hit, det, -1), speed_mps=11.0)
+    area = frames(4, near_kind=[-1, -1, CAR, CAR], near_forward_m=[np.nan, np.nan, 9.0, 9.0],
+                  area_fraction=[0.0, 0.001, 0.08, 0.06], age_bin=[0, 2, 2, 2])
+    model = fit_sensor_model(car_rows, area, camera_hours=1.0)
+    classes = model.class_given_hit["vehicle"]
+    assert classes[4] == pytest.approx(40.5 / 50.5) and classes[3] == pytest.approx(10 / 50.5)
+    assert model.area_fraction["none/0"] == [0.0, 0.001]
+    # a just-rebuilt background's frames are kept apart too (looked up first in fast mode)
+    assert model.area_fraction["none/0/age0"] == [0.0] and model.area_fraction["none/0/age2"] == [0.001]
+    assert model.area_fraction["vehicle/2"] == [0.08, 0.06] == model.area_fraction["vehicle/2/age2"]
+    assert background_age_bin(1.0) == 0 and background_age_bin(1 / 32) == 1 and background_age_bin(1 / 500) == 2
+
+
+def test_a_saved_model_loads_equal(tmp_path):
+    model = fit_sensor_model(rows(50, hit=np.arange(50) % 2 == 0, det_class=1), frames(20), camera_hours=1.0, key="k")
+    model.save(tmp_path / "m.json")
+    assert SensorModel.load(tmp_path / "m.json") == model
+
+
+def test_no_judged_frames_is_an_error_naming_calibration():
+    with pytest.raises(ValueError, match="calibration: no judged camera frames"):
+        fit_sensor_model(rows(0), frames(0), camera_hours=1.0)

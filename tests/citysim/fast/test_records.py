@@ -1,0 +1,41 @@
+"""Calibration records: detections near a candidate on the ground are its, not false alarms."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from citysim.config.scenario import scenario_from_mapping
+from citysim.fast.geometry import CameraGeometry
+from citysim.fast.records import CalibrationRecorder, RecordingSensors
+from citysim.world.agents import AgentState
+from citysim.world.street import build_street
+from detector.detector import Detection
+from tests.citysim.fast.synthetic import tiny_scenario
+
+
+def agent(object_id: int, x_m: float, y_m: float, cls: str = "pedestrian", light_on: bool = False) -> AgentState:
+    return AgentState(object_id, cls, x_m, y_m, 0.0, 1.4, 0.5, 0.5, 1.75, light_on=light_on)
+
+
+def detection_at(cam, x_m: float, y_m: float) -> Detection:
+    u, v = cam.project(np.array([[x_m, y_m, 0.0]]))[0]
+    box = (int(round(u)) - 5, int(round(v)) - 30, 10, 30)
+    return Detection(box, np.array([0, 0, 0, 10.0, 0, 0]), "pedestrian", np.array([0.1, 0.9, 0, 0, 0]), 0.9, 1)
+
+
+def test_a_detection_on_the_ground_near_a_candidate_is_its_hit():
+    street = build_street(scenario_from_mapping(tiny_scenario()))
+    geometry = CameraGeometry(street)
+    recorder = CalibrationRecorder(geometry, RecordingSensors(), 30.0)
+    cam = geometry.cameras[0]
+    x0 = float(cam.position_m[0])
+    walker, car = agent(1, x0 + 12.0, -4.3), agent(2, x0 + 25.0, -1.6, "vehicle", light_on=True)
+    recorder.on_step(0.0, [walker, car], np.full(3, 0.2))
+    idx = np.flatnonzero(geometry.candidates([walker, car]).seen[:, 0])
+    assert set(idx.tolist()) == {0, 1}
+    near_walker = detection_at(cam, x0 + 13.5, -4.3)  # 1.5 m from the walker
+    beam = detection_at(cam, x0 + 10.0, 1.6)  # the car's beam, 15 m ahead of it
+    stray = detection_at(cam, x0 + 12.0, 4.3)  # 8.6 m across from the walker, no light there
+    hits: dict[int, int] = {}
+    left = recorder._near_candidates(0, idx, hits, [near_walker, beam, stray])
+    assert set(hits) == {1, 2} and left == [stray]
