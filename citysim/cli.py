@@ -45,7 +45,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
 
 def cmd_run(args) -> int:
     from citysim.config.scenario import load_scenario, override
-    from citysim.sim.compare import default_workers, run_comparison
+    from citysim.sim.compare import controller_names, default_workers, run_comparison
 
     scenario = load_scenario(args.scenario)
     updates = {}
@@ -55,7 +55,7 @@ def cmd_run(args) -> int:
         updates["seed"] = args.seed
     if updates:
         scenario = override(scenario, updates)
-    names = [n.strip() for n in args.controllers.split(",") if n.strip()] if args.controllers else None
+    names = controller_names(args.controllers)
     check_output_dir(args.out, "citysim run", RUN_OUTPUTS)
     workers = args.workers or default_workers()
     summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=args.out, workers=workers,
@@ -105,6 +105,7 @@ def cmd_render(args) -> int:
 
 
 def cmd_sweep(args) -> int:
+    from citysim.sim.validation import TOLERANCE_NOTE
     from citysim.sweep.runner import run_sweep
 
     check_output_dir(args.out, "citysim sweep", SWEEP_OUTPUTS)  # an earlier folder of this sweep resumes
@@ -116,8 +117,7 @@ def cmd_sweep(args) -> int:
     if "check" in counts:
         check = counts["check"]
         print(f"full-fidelity check of {check['points']} points: {check['cells_pass']} of {check['cells']} figures "
-              f"agree within tolerance (savings 2 points, lit on entry 1 point, lag p95 0.5 s, false on-time 10 %); "
-              f"{check['file']}")
+              f"agree ({TOLERANCE_NOTE}); {check['file']}")
     print(f"results written to {counts['results']}; plots and report: citysim plot {args.out}")
     return 0
 
@@ -138,13 +138,12 @@ def cmd_calibrate(args) -> int:
 
 def cmd_validate(args) -> int:
     from citysim.config.scenario import load_scenario
+    from citysim.sim.compare import controller_names, resolve_controllers
     from citysim.sim.validation import validate, validation_table
 
     scenario = load_scenario(args.scenario)
-    names = [n.strip() for n in args.controllers.split(",") if n.strip()] if args.controllers else None
+    names = controller_names(args.controllers)
     if names:
-        from citysim.sim.compare import resolve_controllers
-
         resolve_controllers(scenario, names)  # unknown names fail here, before any work
     result = validate(scenario, seeds=args.seeds, duration_s=args.duration, controllers=names, cache_dir=args.cache,
                       workers=args.workers, progress=not args.no_progress)  # fmt: skip

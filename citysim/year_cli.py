@@ -17,7 +17,7 @@ YEAR_OUTPUTS = ("year.json", "plots/", "report.html")
 
 def cmd_year(args) -> int:
     from citysim.config.scenario import load_scenario
-    from citysim.sim.compare import default_workers, resolve_controllers
+    from citysim.sim.compare import controller_names, default_workers, resolve_controllers
     from citysim.year.counts_csv import CountsError
     from citysim.year.plan import prepare_year, table_runs, year_spec
     from citysim.year.run import run_year
@@ -25,7 +25,7 @@ def cmd_year(args) -> int:
     scenario = load_scenario(args.scenario)
     year = year_spec(scenario, str(args.scenario), latitude_deg=args.lat, longitude_deg=args.lon,
                      timezone=args.timezone, year=args.year, sample_s=args.sample_s)
-    names = [n.strip() for n in args.controllers.split(",") if n.strip()] if args.controllers else None
+    names = controller_names(args.controllers)
     resolve_controllers(scenario, names)  # unknown names fail here, before any work
     check_output_dir(args.out, "citysim year", YEAR_OUTPUTS)
     # fast by default: light controllers run alike in both; camera controllers use the sensor model

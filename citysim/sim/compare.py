@@ -43,6 +43,11 @@ from detector.outdir import staged_output
 REFERENCE_CONTROLLERS = ("always_on", "oracle")
 
 
+def controller_names(text: str | None) -> list[str] | None:
+    """The names of a comma-separated --controllers value (None when not given: the scenario's list)."""
+    return [n.strip() for n in text.split(",") if n.strip()] if text else None
+
+
 def resolve_controllers(scenario: Scenario, names: Sequence[str] | None) -> list[ControllerSpec]:
     """The specs to run: the scenario's own list, or the names given, with always_on and the
     oracle first whether named or not."""

@@ -54,11 +54,15 @@ def check_points(n_points: int, n_checks: int) -> list[int]:
     return sorted({round(i * (n_points - 1) / (n_checks - 1)) for i in range(n_checks)})
 
 
-def check_report(pairs: Sequence[tuple[str, dict, dict]]) -> dict:
-    """Per checked point (point_id, full summary, fast summary): the figures' agreement."""
-    points = {pid: compare_figures([full], [fast]) for pid, full, fast in pairs}
+def _tallied(points: dict) -> dict:
+    """``points`` with the count of their agreement cells and of those that pass."""
     cells = [cell for rows in points.values() for row in rows.values() for cell in row.values()]
     return {"points": points, "cells": len(cells), "cells_pass": sum(bool(c["pass"]) for c in cells)}
+
+
+def check_report(pairs: Sequence[tuple[str, dict, dict]]) -> dict:
+    """Per checked point (point_id, full summary, fast summary): the figures' agreement."""
+    return _tallied({pid: compare_figures([full], [fast]) for pid, full, fast in pairs})
 
 
 def write_check(out_dir: Path, report: dict) -> Path:
@@ -71,8 +75,7 @@ def write_check(out_dir: Path, report: dict) -> Path:
         except (OSError, json.JSONDecodeError):
             points = {}
     points.update(report["points"])
-    cells = [cell for rows in points.values() for row in rows.values() for cell in row.values()]
-    merged = {"points": points, "cells": len(cells), "cells_pass": sum(bool(c["pass"]) for c in cells)}
+    merged = _tallied(points)
     tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(merged, indent=2) + "\n")
     tmp.replace(path)
