@@ -23,6 +23,8 @@ import numbers
 
 import numpy as np
 
+from detector.tracks.associate import greedy_assign
+
 
 def p_detect_within(p: float, n: int) -> float:
     """Eq. 12: P(at least floor(n/2) + 1 successes in n Bernoulli trials of probability p)."""
@@ -253,23 +255,14 @@ class Tracker:
 
     def _match(self, boxes: list) -> list[int]:
         """Greedy assignment: each box's track index, -1 for none."""
-        track_of = [-1] * len(boxes)
         if not self._ids or not boxes:
-            return track_of
+            return [-1] * len(boxes)
         pred = self._predicted()
         if len(pred) * len(boxes) > self.SCALAR_MAX_PAIRS:
             pairs = self._scores_vectorised(pred, boxes)
         else:
             pairs = self._scores(pred, boxes)
-        # best pair first, ties in row-major order: the same choices as taking the argmax
-        # of the score matrix again and again with matched rows and columns struck out
-        pairs.sort(key=lambda pair: -pair[0])
-        taken = set()
-        for _, ti, di in pairs:
-            if ti not in taken and track_of[di] < 0:
-                track_of[di] = ti
-                taken.add(ti)
-        return track_of
+        return greedy_assign(pairs, len(boxes))
 
     # --------------------------------------------------------------- update
     def update(self, boxes_px: np.ndarray, is_target: np.ndarray | None = None) -> np.ndarray:

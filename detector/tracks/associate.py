@@ -84,13 +84,20 @@ def associate(
     tracks: Sequence[Track], boxes_px: Sequence[Sequence[float]], grounds: Sequence, frame: int, gates: Gates
 ) -> list[int]:
     """Each region's track index (-1: none), greedy on ``pair_scores``, best pair first."""
-    track_of = [-1] * len(boxes_px)
     if not tracks or not boxes_px:
-        return track_of
-    pairs = pair_scores(tracks, boxes_px, grounds, frame, gates)
-    pairs.sort(key=lambda pair: -pair[0])  # stable: ties keep track-major order
+        return [-1] * len(boxes_px)
+    return greedy_assign(pair_scores(tracks, boxes_px, grounds, frame, gates), len(boxes_px))
+
+
+def greedy_assign(pairs: list[tuple[float, int, int]], n_items: int) -> list[int]:
+    """Each of ``n_items``' track index (-1: none) from (score, track, item) pairs, best pair first.
+
+    The sort is stable, so tied pairs keep their listed (track-major) order: the same choices as
+    taking the argmax of the score matrix again and again with matched rows and columns struck out.
+    """
+    track_of = [-1] * n_items
     taken = set()
-    for _, ti, ri in pairs:
+    for _, ti, ri in sorted(pairs, key=lambda pair: -pair[0]):
         if ti not in taken and track_of[ri] < 0:
             track_of[ri] = ti
             taken.add(ti)
