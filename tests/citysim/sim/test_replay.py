@@ -83,8 +83,12 @@ def read_run(folder) -> tuple[dict, bytes, bytes]:
 
 @pytest.mark.slow
 def test_a_comparison_replaying_traffic_writes_the_run_folder_of_one_world_per_controller(tmp_path):
-    # 35 s at 60 Hz: two chunks, streamed from the recorder process to the controllers' processes
-    scenario = scenario_from_mapping({**busy_street(35.0, lamps_x_m=(4.0, 34.0)), "physics_hz": 60.0})
+    # 31 s at 60 Hz: two chunks (1,860 steps), streamed from the recorder process to the
+    # controllers' processes; the busy street's physics is most of this test's time
+    data = busy_street(31.0, lamps_x_m=(4.0, 34.0))
+    # a quarter of the pixels: the test is about the traffic the controllers see, not the image
+    data["lamps"]["camera"] = {**data["lamps"]["camera"], "width_px": 160, "height_px": 120}
+    scenario = scenario_from_mapping({**data, "physics_hz": 60.0})
     names = ["pir", "detector_confirmed"]
     run_comparison(scenario, names, out_dir=tmp_path / "worlds", replay_traffic=False)
     run_comparison(scenario, names, out_dir=tmp_path / "replayed", workers=2)
