@@ -96,10 +96,11 @@ class Detector:
     ``max_distance_m`` can appear (``detector.roi.range_crop``, the crop in ``self.crop``); every
     target within range is then detected as on the full frame (same box, features and class);
     only regions reaching above the band (beyond range, or taller than any target) are dropped.
-    False: the whole frame, as the paper's implementation does. ``equalise_tiles_only``: run
-    CLAHE only on the full frame's tiles the crop needs rather than on the whole frame (faster;
-    equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel or
-    two off the full frame's). ``tracking``: decide per track (``detector.tracks``, the
+    False: the whole frame, as the paper's implementation does. By default CLAHE gives
+    the crop the whole frame's values, computed on the crop (``detector.clahe``).
+    ``equalise_tiles_only``: OpenCV's CLAHE on the full frame's tiles the crop needs (no faster
+    now; equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel
+    or two off the full frame's). ``tracking``: decide per track (``detector.tracks``, the
     default; ``tracks`` a configured ``TrackSet`` or None for the default one) or per frame
     (False: the paper's path, ``tracker`` its light box tracker).
     """

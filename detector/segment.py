@@ -13,8 +13,8 @@ has area (w-1)(h-1)).
 
 A segmenter may work on a ``detector.roi.Crop`` of the frame only (the detector
 gives it the band where a target within range can appear): MOG2, the morphology
-and the contours run on the crop, CLAHE on the crop and the few rows of the full
-frame's tiles above it that its interpolation needs; contours are traced with
+and the contours run on the crop, and so does CLAHE (``detector.clahe``: the whole
+frame's values, from the tiles the crop needs); contours are traced with
 the crop's offset so boxes and contours are in full-frame pixels, and regions
 touching a crop edge that is not a frame edge are flagged ``cut_by_crop`` rather
 than ``touches_border``. Without a crop it works on whole frames of any size.
@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from detector.clahe import CropCLAHE
 from detector.roi import Crop, full_frame
 
 # below this many contours a Python loop over cv2 calls beats the vectorised path (measured: 40 contours ~ equal)
@@ -223,8 +224,17 @@ class Segmenter:
             clipLimit=self.params.clahe_clip_limit, tileGridSize=crop.clahe_tiles
         )
         top, bottom, left, right = crop.clahe_px
-        self._equalised = np.empty((bottom - top, right - left), np.uint8)
-        self._equalised_crop = self._equalised[crop.slices_in_clahe]
+        # the whole frame's equalisation: the crop's values only, computed on the crop
+        self._crop_clahe = None
+        if (top, bottom, left, right) == (0, crop.frame_height_px, 0, crop.frame_width_px):
+            self._crop_clahe = CropCLAHE(
+                self.params.clahe_clip_limit, self.params.clahe_tile_px, (bottom, right),
+                (crop.top_px, crop.bottom_px), (crop.left_px, crop.right_px),
+            )  # fmt: skip
+            self._equalised = self._equalised_crop = self._crop_clahe.out
+        else:
+            self._equalised = np.empty((bottom - top, right - left), np.uint8)
+            self._equalised_crop = self._equalised[crop.slices_in_clahe]
         self._mask = np.zeros(self._frame_shape, np.uint8)
         self._fg = self._mask[crop.slices]
         self._frame_px = crop.frame_height_px * crop.frame_width_px
@@ -283,7 +293,10 @@ class Segmenter:
                 )
             self._use_crop(full_frame(*gray.shape, self.params.clahe_tile_px))
         p, fg = self.params, self._fg
-        self._clahe.apply(gray[self._clahe_part], dst=self._equalised)
+        if self._crop_clahe is not None:
+            self._crop_clahe.apply(gray)
+        else:
+            self._clahe.apply(gray[self._clahe_part], dst=self._equalised)
         rate = p.learning_rate if learning_rate is None else learning_rate
         self._mog2.apply(self._equalised_crop, fgmask=fg, learningRate=rate)
         if not cv2.countNonZero(fg):  # nothing moved: no morphology or contours to run
