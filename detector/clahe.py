@@ -38,7 +38,9 @@ _BINS = 256
 
 
 @njit(cache=True, nogil=True)
-def _tile_luts(src, tile_h, tile_w, tile_rows, tile_cols, clip_limit, lut_scale, pairs):  # pragma: no cover - compiled
+def _tile_luts(
+    src, tile_h, tile_w, tile_rows, tile_cols, clip_limit, lut_scale, pairs
+):  # pragma: no cover - compiled
     """The look-up table of every tile in ``tile_rows`` x ``tile_cols`` (ranges of tile indices)
     of the uint8 frame ``src``, as OpenCV builds it, written as pairs: ``pairs[ty, k, v]`` holds
     the values for v of the tiles left and right of the k-th boundary (tiles k - 1 and k, clamped
@@ -73,7 +75,9 @@ def _tile_luts(src, tile_h, tile_w, tile_rows, tile_cols, clip_limit, lut_scale,
             for i in range(_BINS):
                 total += hist[i]
                 # saturate_cast<uchar>(float): round half to even, then clamp (never needed here)
-                lut[i] = min(max(np.rint(np.float32(total) * lut_scale), np.float32(0.0)), np.float32(255.0))
+                lut[i] = min(
+                    max(np.rint(np.float32(total) * lut_scale), np.float32(0.0)), np.float32(255.0)
+                )
             pairs[ty, tx, :, 1] = lut
             pairs[ty, tx + 1, :, 0] = lut
             if tx == 0:
@@ -125,6 +129,16 @@ def _interpolate(src, pairs, rows, cols, tile_h, columns, dst):  # pragma: no co
             dst_row[k] = np.uint8(np.int32(np.rint(res)))
 
 
+@njit(cache=True, nogil=True)
+def _equalise(
+    src, ranges, clip_limit, lut_scale, tile_h, tile_w, pairs, columns, dst
+):  # pragma: no cover - compiled
+    """``_tile_luts`` then ``_interpolate``, in one call from Python (each call from Python
+    costs microseconds of argument checks); ``ranges``: (tile rows, tile cols, rows, cols)."""
+    _tile_luts(src, tile_h, tile_w, ranges[0], ranges[1], clip_limit, lut_scale, pairs)
+    _interpolate(src, pairs, ranges[2], ranges[3], tile_h, columns, dst)
+
+
 def tiles_for(start_px: int, end_px: int, tile_px: int, n_tiles: int) -> tuple[int, int]:
     """Half-open range of the tiles whose tables OpenCV interpolates between for pixels
     ``start_px .. end_px - 1``: pixel p lies between tiles floor(p / tile - 0.5) and the next
@@ -171,8 +185,13 @@ class CropCLAHE:
         # tables of tiles outside the ranges stay 0 and are never read
         self._pairs = np.zeros((tiles, tiles + 1, _BINS, 2), np.float32)
         n_cols = cols[1] - cols[0]
-        self._columns = (np.empty(n_cols, np.int64), np.empty(n_cols, np.float32), np.empty(n_cols, np.float32))
+        self._columns = (
+            np.empty(n_cols, np.int64),
+            np.empty(n_cols, np.float32),
+            np.empty(n_cols, np.float32),
+        )
         _column_weights(self._cols, self._tile_w, *self._columns)
+        self._ranges = np.stack([self._tile_rows, self._tile_cols, self._rows, self._cols])
         self.exact = self._matches_opencv(h, w)
 
     @property
@@ -188,11 +207,10 @@ class CropCLAHE:
         if not self.exact:
             np.copyto(self.out, self._opencv.apply(gray)[self._slices])
             return self.out
-        _tile_luts(
-            gray, self._tile_h, self._tile_w, self._tile_rows, self._tile_cols,
-            self._clip, self._scale, self._pairs,
+        _equalise(
+            gray, self._ranges, self._clip, self._scale, self._tile_h, self._tile_w, self._pairs,
+            self._columns, self.out,
         )  # fmt: skip
-        _interpolate(gray, self._pairs, self._rows, self._cols, self._tile_h, self._columns, self.out)
         return self.out
 
     def _matches_opencv(self, h: int, w: int) -> bool:

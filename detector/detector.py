@@ -233,14 +233,17 @@ class Detector:
         # (numpy's per-call cost would exceed the arithmetic), arrays only where results go out
         if not regions.contours:
             return self._nothing()
-        boxes, areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
+        if regions.lists is not None:  # copies: division and the edge test below change them
+            boxes, areas, edge = (list(values) for values in regions.lists)
+        else:
+            boxes, areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
+            edge = regions.unusable.tolist()
         rows = self._geometry.rows(boxes, areas)
         divided, _ = divide_rows(
             self._geometry, regions.contours, boxes, areas, rows, self.division
         )
         # a region cut by the border (or the crop) is classified only as the object divided off
         # it, when that object is clear of the edge (the light spot was the part that reached it)
-        edge = regions.unusable.tolist()
         if any(edge):
             crop = self.crop
             left, top, right, bottom = crop.left_px, crop.top_px, crop.right_px, crop.bottom_px

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from detector.camera import CameraModel
+from detector.contours import contour_boxes_and_areas
 from detector.divide import DivisionParams, divide_regions
 from detector.features import region_features
-from detector.segment import Regions, Segmenter, SegmenterParams, contour_boxes_and_areas
+from detector.segment import Regions, Segmenter, SegmenterParams
 from detector.split import split_object_and_spot
 from detector.train.shapes import pedestrian_shape, silhouette_mask
 from tests.detector.cameras import scene_b
@@ -323,7 +324,7 @@ def test_division_params_are_validated():
 
 
 def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
-    import detector.segment as segment
+    import detector.contours as contour_sets
 
     def run() -> list[Regions]:
         scene = Scene(9)
@@ -337,7 +338,7 @@ def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
         return out
 
     few = run()
-    monkeypatch.setattr(segment, "_FEW_CONTOURS", 0)  # every frame through the vectorised path
+    monkeypatch.setattr(contour_sets, "FEW_CONTOURS", 0)  # every frame through the vectorised path
     many = run()
     assert sum(len(r) for r in few) >= 6 * 6
     for a, b in zip(few, many, strict=True):
@@ -346,6 +347,29 @@ def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
         np.testing.assert_array_equal(a.touches_border, b.touches_border)
         assert a.boxes_px.dtype == b.boxes_px.dtype == np.int32 and a.touches_border.any()
         assert [len(c) for c in a.contours] == [len(c) for c in b.contours]
+
+
+def test_few_contour_edge_flags_and_lists_are_the_arrays_own():
+    """On a crop whose top is not the frame's (and whose other edges are), the per-frame path's
+    Python edge test gives ``_edges``' flags, and ``Regions.lists`` the arrays' values."""
+    from detector.roi import Crop
+
+    scene = Scene(4)
+    seg = Segmenter(crop=Crop(60, H_PX, 0, W_PX, H_PX, W_PX, (0, H_PX, 0, W_PX), (8, 8)))
+    for _ in range(30):
+        seg.apply(scene.frame())
+    # across the crop's top; at the frame's bottom, left, right; across the top at the left; inside
+    rects = [(100, 40, 20, 50), (150, 200, 20, 40), (0, 120, 15, 30), (300, 150, 20, 30)]
+    rects += [(0, 30, 25, 60), (220, 110, 20, 40)]
+    regions = seg.apply(scene.frame(rects))
+    assert len(regions) == 6 and regions.lists is not None
+    touches, cut = seg._edges(regions.boxes_px)
+    np.testing.assert_array_equal(regions.touches_border, touches)
+    np.testing.assert_array_equal(regions.cut_by_crop, cut)
+    assert touches.sum() == 4 and cut.sum() == 2 and (touches & cut).sum() == 1
+    assert regions.lists == (
+        regions.boxes_px.tolist(), regions.areas_px.tolist(), regions.unusable.tolist()
+    )
 
 
 def test_explicit_automatic_learning_rate_is_mog2s_own():
