@@ -32,6 +32,7 @@ ground distances, m (see ``detector.camera``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -160,6 +161,9 @@ class Detector:
         # per-camera constants, computed once rather than every frame
         self._frame_shape = (camera.height_px, camera.width_px)
         self._geometry = RegionGeometry(camera)
+        # without lens distortion an object divided off a region beyond range is beyond it too
+        # (its bottom row is at or above the region's): such regions are not tried
+        self._divide_within_m = math.inf if camera.has_distortion else self.max_distance_m
         if tracking and tracks is None:
             tracks = TrackSet(camera, self._class_names, self.target_threshold, geometry=self._geometry)
         self.tracks: TrackSet | None = tracks if tracking else None
@@ -240,7 +244,7 @@ class Detector:
             edge = regions.unusable.tolist()
         rows = self._geometry.rows(boxes, areas)
         divided, _ = divide_rows(
-            self._geometry, regions.contours, boxes, areas, rows, self.division
+            self._geometry, regions.contours, boxes, areas, rows, self.division, self._divide_within_m
         )
         # a region cut by the border (or the crop) is classified only as the object divided off
         # it, when that object is clear of the edge (the light spot was the part that reached it)

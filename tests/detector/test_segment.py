@@ -279,6 +279,37 @@ def test_division_cuts_a_pedestrian_from_its_light_spot(spot_offset_m, heading_r
     assert sh < 0.7 * sw
 
 
+def test_division_skips_only_regions_whose_object_would_be_beyond_range_too():
+    """``divide_rows(..., beyond_m)``, the detector's saving on a camera without distortion: the
+    object part of a divided region is never nearer than the region (its bottom row is at or
+    above the region's), so a region beyond range needs no division: its object is dropped too."""
+    from detector.divide import divide_rows
+    from detector.features import RegionGeometry
+
+    cam = scene_b()
+    assert not cam.has_distortion
+    geometry = RegionGeometry(cam)
+    spots = [((0.0, 1.05), math.pi / 2), ((-0.95, 0.0), math.pi), ((1.0, 0.0), 0.0)]
+    beyond = 0
+    for x_m in (14.0, 22.0, 26.0, 28.0, 30.0):
+        for offset_m, heading_rad in spots:
+            walker = pedestrian_shape(x_m, 0.3, heading_rad, **WALKER)
+            contours, boxes, areas, feats, _ = region_of(
+                cam, walker, ((x_m + offset_m[0], 0.3 + offset_m[1]), (0.8, 0.9))
+            )
+            region_m = feats[0, 3]
+            rows = [feats[0].tolist()]
+            divided, _ = divide_rows(geometry, contours, boxes.tolist(), areas.tolist(), rows)
+            assert divided == [0] and rows[0][3] >= region_m  # the object part: not nearer
+            rows = [feats[0].tolist()]
+            skipped, _ = divide_rows(
+                geometry, contours, boxes.tolist(), areas.tolist(), rows, beyond_m=25.0
+            )
+            assert skipped == ([] if region_m > 25.0 else [0])
+            beyond += region_m > 25.0
+    assert beyond >= 4
+
+
 @pytest.mark.parametrize(
     "heading_rad, phase_rad", [(math.pi / 2, 0.0), (math.pi / 2, 1.5), (0.3, 1.0), (math.pi, 2.0)]
 )
@@ -368,7 +399,9 @@ def test_few_contour_edge_flags_and_lists_are_the_arrays_own():
     np.testing.assert_array_equal(regions.cut_by_crop, cut)
     assert touches.sum() == 4 and cut.sum() == 2 and (touches & cut).sum() == 1
     assert regions.lists == (
-        regions.boxes_px.tolist(), regions.areas_px.tolist(), regions.unusable.tolist()
+        regions.boxes_px.tolist(),
+        regions.areas_px.tolist(),
+        regions.unusable.tolist(),
     )
 
 
