@@ -32,6 +32,7 @@ ground distances, m (see ``detector.camera``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -96,10 +97,11 @@ class Detector:
     ``max_distance_m`` can appear (``detector.roi.range_crop``, the crop in ``self.crop``); every
     target within range is then detected as on the full frame (same box, features and class);
     only regions reaching above the band (beyond range, or taller than any target) are dropped.
-    False: the whole frame, as the paper's implementation does. ``equalise_tiles_only``: run
-    CLAHE only on the full frame's tiles the crop needs rather than on the whole frame (faster;
-    equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel or
-    two off the full frame's). ``tracking``: decide per track (``detector.tracks``, the
+    False: the whole frame, as the paper's implementation does. By default CLAHE gives
+    the crop the whole frame's values, computed on the crop (``detector.clahe``).
+    ``equalise_tiles_only``: OpenCV's CLAHE on the full frame's tiles the crop needs (no faster
+    now; equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel
+    or two off the full frame's). ``tracking``: decide per track (``detector.tracks``, the
     default; ``tracks`` a configured ``TrackSet`` or None for the default one) or per frame
     (False: the paper's path, ``tracker`` its light box tracker).
     """
@@ -159,6 +161,9 @@ class Detector:
         # per-camera constants, computed once rather than every frame
         self._frame_shape = (camera.height_px, camera.width_px)
         self._geometry = RegionGeometry(camera)
+        # without lens distortion an object divided off a region beyond range is beyond it too
+        # (its bottom row is at or above the region's): such regions are not tried
+        self._divide_within_m = math.inf if camera.has_distortion else self.max_distance_m
         if tracking and tracks is None:
             tracks = TrackSet(camera, self._class_names, self.target_threshold, geometry=self._geometry)
         self.tracks: TrackSet | None = tracks if tracking else None
@@ -232,14 +237,17 @@ class Detector:
         # (numpy's per-call cost would exceed the arithmetic), arrays only where results go out
         if not regions.contours:
             return self._nothing()
-        boxes, areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
+        if regions.lists is not None:  # copies: division and the edge test below change them
+            boxes, areas, edge = (list(values) for values in regions.lists)
+        else:
+            boxes, areas = regions.boxes_px.tolist(), regions.areas_px.tolist()
+            edge = regions.unusable.tolist()
         rows = self._geometry.rows(boxes, areas)
         divided, _ = divide_rows(
-            self._geometry, regions.contours, boxes, areas, rows, self.division
+            self._geometry, regions.contours, boxes, areas, rows, self.division, self._divide_within_m
         )
         # a region cut by the border (or the crop) is classified only as the object divided off
         # it, when that object is clear of the edge (the light spot was the part that reached it)
-        edge = regions.unusable.tolist()
         if any(edge):
             crop = self.crop
             left, top, right, bottom = crop.left_px, crop.top_px, crop.right_px, crop.bottom_px

@@ -131,20 +131,24 @@ def divide_rows(
     areas_px: list[float],
     rows: list[list[float] | None],
     params: DivisionParams = _DEFAULT_PARAMS,
+    beyond_m: float = math.inf,
 ) -> tuple[list[int], list[list[int]]]:
     """``divide_regions`` on plain Python rows, replacing divided regions' entries in place.
 
     ``boxes_px`` are [x, y, w, h] lists, ``rows`` the ``RegionGeometry.rows``
     feature rows (None: no ground point). Returns (indices of the divided
     regions, the spot boxes cut off). The detector's per-frame entry point:
-    a frame's few regions cost no array round trip.
+    a frame's few regions cost no array round trip. Regions farther than ``beyond_m`` are
+    not tried: the detector passes its range for a camera without lens distortion, where the
+    object part (inside the region's box: its bottom row at or above the region's) is at least
+    as far away, so it would be dropped as beyond range all the same.
     """
     divided: list[int] = []
     spots: list[list[int]] = []
     for i, (box, area, row) in enumerate(zip(boxes_px, areas_px, rows, strict=True)):
         x, y, w, h = box
         # histograms of a region under min_height_px rows cannot resolve an object above a spot
-        if row is None or h < params.min_height_px:
+        if row is None or h < params.min_height_px or row[3] > beyond_m:
             continue
         extent = area / max(w * h, 1)
         # NaN areas compare False

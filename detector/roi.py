@@ -32,11 +32,13 @@ stay background so that nothing joins it, and the mask of a row depends on the M
 ``(2 + dilate_iterations) * r`` rows away (erosion, dilation, the joining dilation), which differs
 from the full frame's within that distance of the crop's edge.
 
-Equalisation. MOG2, the morphology and the contours run on the crop. CLAHE, by default, on the
-whole frame: its look-up tables come from every tile and its float32 interpolation weights from
-the row within the image it is given, so only the whole frame gives the full frame's equalised
-values bit for bit, and then the crop's masks, regions and detections are the full frame's.
-``equalise_tiles_only`` saves most of CLAHE's work above the band: CLAHE runs on the full
+Equalisation. MOG2, the morphology and the contours run on the crop. OpenCV's CLAHE takes its
+float32 interpolation weights from the row within the image it is given, so only the whole frame
+gives the full frame's equalised values bit for bit. By default (``Crop.clahe_px`` the whole
+frame) the segmenter computes exactly those values on the crop alone (``detector.clahe``: the
+tables of the tiles the crop needs, the weights from full-frame rows), and then the crop's masks,
+regions and detections are the full frame's. The older approximation, ``equalise_tiles_only``,
+gives OpenCV's CLAHE the full frame's tiles the crop needs instead: CLAHE runs on the full
 frame's own tiles (``SegmenterParams.clahe_tile_px`` per side) from the tile boundary at least
 half a tile above the crop, so every crop pixel interpolates between the same tiles' tables, built
 from the same pixels, as on the full frame; but the weights, computed from the row within the

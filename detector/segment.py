@@ -13,8 +13,8 @@ has area (w-1)(h-1)).
 
 A segmenter may work on a ``detector.roi.Crop`` of the frame only (the detector
 gives it the band where a target within range can appear): MOG2, the morphology
-and the contours run on the crop, CLAHE on the crop and the few rows of the full
-frame's tiles above it that its interpolation needs; contours are traced with
+and the contours run on the crop, and so does CLAHE (``detector.clahe``: the whole
+frame's values, from the tiles the crop needs); contours are traced with
 the crop's offset so boxes and contours are in full-frame pixels, and regions
 touching a crop edge that is not a frame edge are flagged ``cut_by_crop`` rather
 than ``touches_border``. Without a crop it works on whole frames of any size.
@@ -39,10 +39,10 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from detector import contours as contour_sets
+from detector.clahe import CropCLAHE
 from detector.roi import Crop, full_frame
 
-# below this many contours a Python loop over cv2 calls beats the vectorised path (measured: 40 contours ~ equal)
-_FEW_CONTOURS = 32
 # the regions of a frame where nothing moved, shared: zero-size arrays hold nothing to change
 _NO_BOXES = np.zeros((0, 4), np.int32)
 _NO_AREAS = np.zeros(0, np.float64)
@@ -80,12 +80,13 @@ class SegmenterParams:
     learning_rate: float = -1.0
 
     def __post_init__(self) -> None:
+        int_at_least = "an integer >= {}".format
         checks = (
             ("clahe_clip_limit", self.clahe_clip_limit > 0, "> 0"),
             (
                 "clahe_tile_px",
                 _is_int(self.clahe_tile_px) and self.clahe_tile_px >= 1,
-                "an integer >= 1",
+                int_at_least(1),
             ),
             ("mog2_history_s", self.mog2_history_s > 0, "> 0 s"),
             ("mog2_var_threshold", self.mog2_var_threshold > 0, "> 0"),
@@ -97,12 +98,12 @@ class SegmenterParams:
             (
                 "open_kernel_px",
                 _is_int(self.open_kernel_px) and self.open_kernel_px >= 1,
-                "an integer >= 1",
+                int_at_least(1),
             ),
             (
                 "dilate_iterations",
                 _is_int(self.dilate_iterations) and self.dilate_iterations >= 0,
-                "an integer >= 0",
+                int_at_least(0),
             ),
             ("min_area_fraction", 0.0 <= self.min_area_fraction < 1.0, "in [0, 1)"),
             ("min_extent", 0.0 <= self.min_extent <= 1.0, "in [0, 1]"),
@@ -149,6 +150,9 @@ class Regions:
     foreground_fraction: float
     mask: np.ndarray = field(repr=False)  # (H, W) uint8
     cut_by_crop: np.ndarray | None = None  # (N,) bool
+    #: (boxes [x, y, w, h], areas, unusable) as Python lists, when the segmenter has them: the
+    #: detector's per-frame path reads these rather than converting the arrays (never mutate)
+    lists: tuple[list, list, list] | None = field(default=None, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.boxes_px)
@@ -199,7 +203,9 @@ class Segmenter:
         if not (isinstance(fps, int | float) and fps > 0):
             raise ValueError(f"Segmenter fps must be > 0 frames/s, got {fps!r}")
         if crop is not None and not isinstance(crop, Crop):
-            raise TypeError(f"Segmenter crop must be a detector.roi.Crop, got {type(crop).__name__}")
+            raise TypeError(
+                f"Segmenter crop must be a detector.roi.Crop, got {type(crop).__name__}"
+            )
         self.params = params
         self.fps = float(fps)
         self.history_frames = params.history_frames(self.fps)
@@ -223,8 +229,17 @@ class Segmenter:
             clipLimit=self.params.clahe_clip_limit, tileGridSize=crop.clahe_tiles
         )
         top, bottom, left, right = crop.clahe_px
-        self._equalised = np.empty((bottom - top, right - left), np.uint8)
-        self._equalised_crop = self._equalised[crop.slices_in_clahe]
+        # the whole frame's equalisation: the crop's values only, computed on the crop
+        self._crop_clahe = None
+        if (top, bottom, left, right) == (0, crop.frame_height_px, 0, crop.frame_width_px):
+            self._crop_clahe = CropCLAHE(
+                self.params.clahe_clip_limit, self.params.clahe_tile_px, (bottom, right),
+                (crop.top_px, crop.bottom_px), (crop.left_px, crop.right_px),
+            )  # fmt: skip
+            self._equalised = self._equalised_crop = self._crop_clahe.out
+        else:
+            self._equalised = np.empty((bottom - top, right - left), np.uint8)
+            self._equalised_crop = self._equalised[crop.slices_in_clahe]
         self._mask = np.zeros(self._frame_shape, np.uint8)
         self._fg = self._mask[crop.slices]
         self._frame_px = crop.frame_height_px * crop.frame_width_px
@@ -234,10 +249,19 @@ class Segmenter:
         self._lo = (crop.left_px, crop.top_px)
         self._hi = (crop.right_px, crop.bottom_px)
         self._cropped = not crop.is_full_frame
-        self._lo_is_frame = np.array([crop.left_px == 0, crop.top_px == 0])
-        self._hi_is_frame = np.array(
-            [crop.right_px == crop.frame_width_px, crop.bottom_px == crop.frame_height_px]
-        )
+        # (left, top, right, bottom): whether that edge of the crop is the frame's
+        self._frame_edges = (
+            crop.left_px == 0, crop.top_px == 0,
+            crop.right_px == crop.frame_width_px, crop.bottom_px == crop.frame_height_px,
+        )  # fmt: skip
+        self._lo_is_frame = np.array(self._frame_edges[:2])
+        self._hi_is_frame = np.array(self._frame_edges[2:])
+
+    @property
+    def clahe_histogram_share(self) -> float:
+        """Fraction of the frame's pixels whose CLAHE histograms each frame takes."""
+        crop_clahe = getattr(self, "_crop_clahe", None)  # none before a crop's first frame
+        return 1.0 if crop_clahe is None else crop_clahe.histogram_share
 
     def automatic_learning_rate(self, frames_before: int) -> float:
         """The rate MOG2 picks itself for a frame with ``frames_before`` frames before it since the
@@ -283,7 +307,10 @@ class Segmenter:
                 )
             self._use_crop(full_frame(*gray.shape, self.params.clahe_tile_px))
         p, fg = self.params, self._fg
-        self._clahe.apply(gray[self._clahe_part], dst=self._equalised)
+        if self._crop_clahe is not None:
+            self._crop_clahe.apply(gray)
+        else:
+            self._clahe.apply(gray[self._clahe_part], dst=self._equalised)
         rate = p.learning_rate if learning_rate is None else learning_rate
         self._mog2.apply(self._equalised_crop, fgmask=fg, learningRate=rate)
         if not cv2.countNonZero(fg):  # nothing moved: no morphology or contours to run
@@ -296,7 +323,7 @@ class Segmenter:
         contours, _ = cv2.findContours(
             fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE, offset=self._lo
         )
-        if len(contours) > _FEW_CONTOURS:
+        if len(contours) > contour_sets.FEW_CONTOURS:
             kept, boxes, areas = self._filter_many(contours)
             touches, cut = self._edges(boxes)
             return Regions(boxes, areas, kept, touches, foreground_fraction, self._mask, cut)
@@ -304,10 +331,12 @@ class Segmenter:
 
     def _filter_few(self, contours, foreground_fraction: float) -> Regions:
         """The regions of a frame's few contours: plain Python over OpenCV's per-contour calls,
-        areas first and boxes only for the survivors (most are specks); numpy only for the results."""
+        areas first and boxes only for the survivors (most are specks); the edge flags as
+        ``_edges`` gives them, in Python too; numpy only for the results."""
         min_area_px, min_extent = self._min_area_px, self.params.min_extent
         (left, top), (right, bottom) = self._lo, self._hi
-        kept, box_rows, area_rows, edge_rows = [], [], [], []
+        frame_edges = self._frame_edges
+        kept, box_rows, area_rows, touch_rows, cut_rows = [], [], [], [], []
         for contour in contours:
             area = cv2.contourArea(contour)
             if area < min_area_px:
@@ -316,26 +345,30 @@ class Segmenter:
             if area < min_extent * (w * h):
                 continue
             kept.append(contour)
-            box_rows.append((x, y, w, h))
+            box_rows.append([x, y, w, h])
             area_rows.append(area)
-            edge_rows.append(x <= left or y <= top or x + w >= right or y + h >= bottom)
+            if x > left and y > top and x + w < right and y + h < bottom:  # the usual region
+                touch_rows.append(False)
+                cut_rows.append(False)
+                continue
+            reached = (x <= left, y <= top, x + w >= right, y + h >= bottom)
+            touch_rows.append(any(r and f for r, f in zip(reached, frame_edges, strict=True)))
+            cut_rows.append(any(r and not f for r, f in zip(reached, frame_edges, strict=True)))
         if not kept:  # the usual frame: nothing moved (zero-size arrays cannot be mutated)
             return Regions(
                 _NO_BOXES, _NO_AREAS, kept, _NO_FLAGS, foreground_fraction, self._mask, _NO_FLAGS
             )
-        boxes = np.array(box_rows, np.int32).reshape(-1, 4)
-        if any(edge_rows) and self._cropped:
-            touches, cut = self._edges(boxes)
-        else:
-            touches, cut = np.array(edge_rows, bool), np.zeros(len(kept), bool)
+        unusable = [t or c for t, c in zip(touch_rows, cut_rows, strict=True)]
         return Regions(
-            boxes, np.array(area_rows, np.float64), kept, touches, foreground_fraction, self._mask, cut
-        )
+            np.array(box_rows, np.int32).reshape(-1, 4), np.array(area_rows, np.float64), kept,
+            np.array(touch_rows, bool), foreground_fraction, self._mask, np.array(cut_rows, bool),
+            lists=(box_rows, area_rows, unusable),
+        )  # fmt: skip
 
     def _filter_many(self, contours) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
         """Contours passing the size and extent limits, their boxes and areas, vectorised over all
         vertices for the many specks of a noisy frame."""
-        idx, boxes, areas = _large_enough(contours, self._min_area_px)
+        idx, boxes, areas = contour_sets.large_enough(contours, self._min_area_px)
         dense = areas >= self.params.min_extent * (boxes[:, 2].astype(np.float64) * boxes[:, 3])
         idx, boxes, areas = idx[dense], boxes[dense], areas[dense]
         return [contours[i] for i in idx], boxes, areas
@@ -348,38 +381,3 @@ class Segmenter:
         frame_high = high & self._hi_is_frame
         touches = np.any(frame_low | frame_high, axis=1)
         return touches, np.any((low & ~frame_low) | (high & ~frame_high), axis=1)
-
-
-def _large_enough(contours, min_area_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Indices, boxes and areas of the (many) contours with Green's-theorem area >= min_area_px."""
-    boxes, areas = contour_boxes_and_areas(contours)
-    idx = np.flatnonzero(areas >= min_area_px)
-    return idx, boxes[idx], areas[idx]
-
-
-def contour_boxes_and_areas(
-    contours: list[np.ndarray] | tuple[np.ndarray, ...],
-) -> tuple[np.ndarray, np.ndarray]:
-    """Bounding boxes (N, 4) int32 and Green's-theorem areas (N,) of N OpenCV contours.
-
-    Equal to ``cv2.boundingRect`` and ``cv2.contourArea`` per contour, but done
-    in a handful of numpy calls over all vertices at once once there are many
-    (a frame of sensor noise can hold hundreds of specks); for a few contours
-    OpenCV's own per-contour calls are cheaper than numpy's call overhead.
-    """
-    if len(contours) <= _FEW_CONTOURS:
-        boxes = np.array([cv2.boundingRect(c) for c in contours], np.int32).reshape(-1, 4)
-        return boxes, np.array([cv2.contourArea(c) for c in contours], np.float64)
-    counts = np.fromiter((len(c) for c in contours), dtype=np.intp, count=len(contours))
-    pts = np.concatenate(contours).reshape(-1, 2).astype(np.int64)
-    starts = np.zeros(len(counts), dtype=np.intp)
-    np.cumsum(counts[:-1], out=starts[1:])
-    lo = np.minimum.reduceat(pts, starts, axis=0)
-    hi = np.maximum.reduceat(pts, starts, axis=0)
-    boxes = np.column_stack([lo, hi - lo + 1]).astype(np.int32)
-    # shoelace: each vertex pairs with the next one of its own contour (wrapping)
-    nxt = np.arange(1, len(pts) + 1)
-    nxt[starts + counts - 1] = starts
-    cross = pts[:, 0] * pts[nxt, 1] - pts[nxt, 0] * pts[:, 1]
-    areas = 0.5 * np.abs(np.add.reduceat(cross, starts).astype(np.float64))
-    return boxes, areas

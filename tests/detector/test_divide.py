@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from detector.camera import CameraModel
+from detector.contours import contour_boxes_and_areas
 from detector.detector import Detector
 from detector.divide import DivisionParams, divide_regions
 from detector.features import region_features
-from detector.segment import contour_boxes_and_areas
 from detector.split import split_at_widening
 from tests.detector.cameras import scene_b
 

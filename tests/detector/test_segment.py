@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from detector.camera import CameraModel
+from detector.contours import contour_boxes_and_areas
 from detector.divide import DivisionParams, divide_regions
 from detector.features import region_features
-from detector.segment import Regions, Segmenter, SegmenterParams, contour_boxes_and_areas
+from detector.segment import Regions, Segmenter, SegmenterParams
 from detector.split import split_object_and_spot
 from detector.train.shapes import pedestrian_shape, silhouette_mask
 from tests.detector.cameras import scene_b
@@ -278,6 +279,37 @@ def test_division_cuts_a_pedestrian_from_its_light_spot(spot_offset_m, heading_r
     assert sh < 0.7 * sw
 
 
+def test_division_skips_only_regions_whose_object_would_be_beyond_range_too():
+    """``divide_rows(..., beyond_m)``, the detector's saving on a camera without distortion: the
+    object part of a divided region is never nearer than the region (its bottom row is at or
+    above the region's), so a region beyond range needs no division: its object is dropped too."""
+    from detector.divide import divide_rows
+    from detector.features import RegionGeometry
+
+    cam = scene_b()
+    assert not cam.has_distortion
+    geometry = RegionGeometry(cam)
+    spots = [((0.0, 1.05), math.pi / 2), ((-0.95, 0.0), math.pi), ((1.0, 0.0), 0.0)]
+    beyond = 0
+    for x_m in (14.0, 22.0, 26.0, 28.0, 30.0):
+        for offset_m, heading_rad in spots:
+            walker = pedestrian_shape(x_m, 0.3, heading_rad, **WALKER)
+            contours, boxes, areas, feats, _ = region_of(
+                cam, walker, ((x_m + offset_m[0], 0.3 + offset_m[1]), (0.8, 0.9))
+            )
+            region_m = feats[0, 3]
+            rows = [feats[0].tolist()]
+            divided, _ = divide_rows(geometry, contours, boxes.tolist(), areas.tolist(), rows)
+            assert divided == [0] and rows[0][3] >= region_m  # the object part: not nearer
+            rows = [feats[0].tolist()]
+            skipped, _ = divide_rows(
+                geometry, contours, boxes.tolist(), areas.tolist(), rows, beyond_m=25.0
+            )
+            assert skipped == ([] if region_m > 25.0 else [0])
+            beyond += region_m > 25.0
+    assert beyond >= 4
+
+
 @pytest.mark.parametrize(
     "heading_rad, phase_rad", [(math.pi / 2, 0.0), (math.pi / 2, 1.5), (0.3, 1.0), (math.pi, 2.0)]
 )
@@ -323,7 +355,7 @@ def test_division_params_are_validated():
 
 
 def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
-    import detector.segment as segment
+    import detector.contours as contour_sets
 
     def run() -> list[Regions]:
         scene = Scene(9)
@@ -337,7 +369,7 @@ def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
         return out
 
     few = run()
-    monkeypatch.setattr(segment, "_FEW_CONTOURS", 0)  # every frame through the vectorised path
+    monkeypatch.setattr(contour_sets, "FEW_CONTOURS", 0)  # every frame through the vectorised path
     many = run()
     assert sum(len(r) for r in few) >= 6 * 6
     for a, b in zip(few, many, strict=True):
@@ -346,6 +378,31 @@ def test_few_and_many_contour_paths_give_the_same_regions(monkeypatch):
         np.testing.assert_array_equal(a.touches_border, b.touches_border)
         assert a.boxes_px.dtype == b.boxes_px.dtype == np.int32 and a.touches_border.any()
         assert [len(c) for c in a.contours] == [len(c) for c in b.contours]
+
+
+def test_few_contour_edge_flags_and_lists_are_the_arrays_own():
+    """On a crop whose top is not the frame's (and whose other edges are), the per-frame path's
+    Python edge test gives ``_edges``' flags, and ``Regions.lists`` the arrays' values."""
+    from detector.roi import Crop
+
+    scene = Scene(4)
+    seg = Segmenter(crop=Crop(60, H_PX, 0, W_PX, H_PX, W_PX, (0, H_PX, 0, W_PX), (8, 8)))
+    for _ in range(30):
+        seg.apply(scene.frame())
+    # across the crop's top; at the frame's bottom, left, right; across the top at the left; inside
+    rects = [(100, 40, 20, 50), (150, 200, 20, 40), (0, 120, 15, 30), (300, 150, 20, 30)]
+    rects += [(0, 30, 25, 60), (220, 110, 20, 40)]
+    regions = seg.apply(scene.frame(rects))
+    assert len(regions) == 6 and regions.lists is not None
+    touches, cut = seg._edges(regions.boxes_px)
+    np.testing.assert_array_equal(regions.touches_border, touches)
+    np.testing.assert_array_equal(regions.cut_by_crop, cut)
+    assert touches.sum() == 4 and cut.sum() == 2 and (touches & cut).sum() == 1
+    assert regions.lists == (
+        regions.boxes_px.tolist(),
+        regions.areas_px.tolist(),
+        regions.unusable.tolist(),
+    )
 
 
 def test_explicit_automatic_learning_rate_is_mog2s_own():

@@ -1,0 +1,230 @@
+"""CLAHE of a crop equal, bit for bit, to OpenCV's CLAHE of the whole frame (compiled, numba).
+
+Why: ``cv2.createCLAHE(...).apply`` equalises every pixel of the frame, though the segmenter
+needs only the crop (``detector.roi``): on the suburban lamp camera a fifth of the detector's
+frame. OpenCV's own CLAHE cannot be given less than the frame without changing values (its
+float32 interpolation weights come from the row within the image it is given), so this module
+does what ``cv2.CLAHE.apply`` does, restricted to the crop:
+
+* a look-up table per tile, from the tile's histogram clipped at
+  ``max(int(clip_limit * tile_px / 256), 1)`` and the clipped counts redistributed (a batch to
+  every bin, the residual to every ``256 // residual``-th bin from the first), scaled by
+  ``float32(255) / tile_px`` and rounded half to even; only the tiles whose tables the crop's
+  pixels interpolate between (whole tiles of the full frame's grid, as OpenCV cuts them);
+* per crop pixel, OpenCV's float32 bilinear interpolation between the four tables, with the
+  weights computed from the full frame's row and column, in the same order of operations,
+  rounded half to even.
+
+Every operation is the float32 (or integer) operation OpenCV's C++ does, in the same order, and
+the kernels are compiled without fast-math (no reassociation, no fused multiply-add), so the
+values are OpenCV's. That is checked, not assumed: ``CropCLAHE`` compares itself with
+``cv2.CLAHE.apply`` on probe frames when it is built and falls back to OpenCV on the whole frame
+if any value differs (another OpenCV build might compute differently).
+``tests/detector/test_clahe.py`` compares them on many frames and crops.
+
+Frames that are not a whole number of tiles (OpenCV pads them by reflection) are equalised by
+OpenCV on the whole frame.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+from numba import njit
+
+_BINS = 256
+
+
+@njit(cache=True, nogil=True)
+def _tile_luts(
+    src, tile_h, tile_w, tile_rows, tile_cols, clip_limit, lut_scale, pairs
+):  # pragma: no cover - compiled
+    """The look-up table of every tile in ``tile_rows`` x ``tile_cols`` (ranges of tile indices)
+    of the uint8 frame ``src``, as OpenCV builds it, written as pairs: ``pairs[ty, k, v]`` holds
+    the values for v of the tiles left and right of the k-th boundary (tiles k - 1 and k, clamped
+    to the grid), the two tables a pixel between them interpolates, side by side in memory."""
+    tiles_x = pairs.shape[1] - 1
+    hist = np.empty(_BINS, np.int32)
+    lut = np.empty(_BINS, np.float32)
+    for ty in range(tile_rows[0], tile_rows[1]):
+        for tx in range(tile_cols[0], tile_cols[1]):
+            hist[:] = 0
+            for y in range(ty * tile_h, (ty + 1) * tile_h):
+                row = src[y]
+                for x in range(tx * tile_w, (tx + 1) * tile_w):
+                    hist[row[x]] += 1
+            clipped = 0
+            for i in range(_BINS):
+                if hist[i] > clip_limit:
+                    clipped += hist[i] - clip_limit
+                    hist[i] = clip_limit
+            batch = clipped // _BINS
+            residual = clipped - batch * _BINS
+            for i in range(_BINS):
+                hist[i] += batch
+            if residual != 0:
+                step = max(_BINS // residual, 1)
+                i = 0
+                while i < _BINS and residual > 0:
+                    hist[i] += 1
+                    i += step
+                    residual -= 1
+            total = 0
+            for i in range(_BINS):
+                total += hist[i]
+                # saturate_cast<uchar>(float): round half to even, then clamp (never needed here)
+                lut[i] = min(
+                    max(np.rint(np.float32(total) * lut_scale), np.float32(0.0)), np.float32(255.0)
+                )
+            pairs[ty, tx, :, 1] = lut
+            pairs[ty, tx + 1, :, 0] = lut
+            if tx == 0:
+                pairs[ty, 0, :, 0] = lut
+            if tx == tiles_x - 1:
+                pairs[ty, tiles_x, :, 1] = lut
+
+
+@njit(cache=True, nogil=True)
+def _column_weights(cols, tile_w, boundary, xa, xa1):  # pragma: no cover - compiled
+    """Per column of the half-open range ``cols``: the tile boundary it lies after (index into
+    the pairs) and OpenCV's float32 weights of the right and the left table."""
+    one, half = np.float32(1.0), np.float32(0.5)
+    inv_tw = one / np.float32(tile_w)
+    for k in range(cols[1] - cols[0]):
+        txf = np.float32(cols[0] + k) * inv_tw - half
+        tx1 = int(math.floor(txf))
+        xa[k] = txf - np.float32(tx1)
+        xa1[k] = one - xa[k]
+        boundary[k] = tx1 + 1
+
+
+@njit(cache=True, nogil=True)
+def _interpolate(src, pairs, rows, cols, tile_h, columns, dst):  # pragma: no cover - compiled
+    """``dst[y - rows[0], x - cols[0]]`` for the frame's pixels ``rows`` x ``cols`` (ranges):
+    OpenCV's float32 interpolation between the tables ``pairs`` (``_tile_luts``); ``columns``:
+    ``_column_weights``' (boundary, xa, xa1)."""
+    boundary, xa, xa1 = columns
+    tiles_y = pairs.shape[0]
+    # scalars, not array reads: the writes to dst could alias them, which keeps them in the loop
+    row0, row1, col0, col1 = rows[0], rows[1], cols[0], cols[1]
+    one, half = np.float32(1.0), np.float32(0.5)
+    inv_th = one / np.float32(tile_h)
+    for y in range(row0, row1):
+        tyf = np.float32(y) * inv_th - half
+        ty1 = int(math.floor(tyf))
+        ya = tyf - np.float32(ty1)
+        ya1 = one - ya
+        upper = pairs[max(ty1, 0)]
+        lower = pairs[min(ty1 + 1, tiles_y - 1)]
+        src_row = src[y, col0:col1]
+        dst_row = dst[y - row0]
+        for k in range(col1 - col0):
+            v = src_row[k]
+            a = upper[boundary[k], v]
+            b = lower[boundary[k], v]
+            res = (a[0] * xa1[k] + a[1] * xa[k]) * ya1 + (b[0] * xa1[k] + b[1] * xa[k]) * ya
+            # a convex combination of 0..255 values: within 0..255 after rounding
+            dst_row[k] = np.uint8(np.int32(np.rint(res)))
+
+
+@njit(cache=True, nogil=True)
+def _equalise(
+    src, ranges, clip_limit, lut_scale, tile_h, tile_w, pairs, columns, dst
+):  # pragma: no cover - compiled
+    """``_tile_luts`` then ``_interpolate``, in one call from Python (each call from Python
+    costs microseconds of argument checks); ``ranges``: (tile rows, tile cols, rows, cols)."""
+    _tile_luts(src, tile_h, tile_w, ranges[0], ranges[1], clip_limit, lut_scale, pairs)
+    _interpolate(src, pairs, ranges[2], ranges[3], tile_h, columns, dst)
+
+
+def tiles_for(start_px: int, end_px: int, tile_px: int, n_tiles: int) -> tuple[int, int]:
+    """Half-open range of the tiles whose tables OpenCV interpolates between for pixels
+    ``start_px .. end_px - 1``: pixel p lies between tiles floor(p / tile - 0.5) and the next
+    (clamped to the grid)."""
+    first = max(0, math.floor(start_px / tile_px - 0.5))
+    last = min(n_tiles - 1, math.floor((end_px - 1) / tile_px - 0.5) + 1)
+    return first, last + 1
+
+
+class CropCLAHE:
+    """``cv2.createCLAHE(clip_limit, (tiles, tiles)).apply(frame)[rows, cols]`` computed on the
+    crop only; ``apply(frame)`` writes it into ``self.out`` (a buffer reused across frames,
+    (rows, cols) of the crop) and returns it.
+
+    ``rows``/``cols``: half-open pixel ranges of a ``frame_height_px`` x ``frame_width_px``
+    frame. ``exact`` says whether the compiled path is used (it matched OpenCV on the probe
+    frames); otherwise OpenCV equalises the whole frame and the crop is copied out of it.
+    """
+
+    def __init__(
+        self,
+        clip_limit: float,
+        tiles: int,
+        frame_shape_px: tuple[int, int],
+        rows: tuple[int, int],
+        cols: tuple[int, int],
+    ) -> None:
+        h, w = frame_shape_px
+        self._rows = np.array(rows, np.int64)
+        self._cols = np.array(cols, np.int64)
+        self._slices = (slice(*rows), slice(*cols))
+        self._opencv = cv2.createCLAHE(clipLimit=clip_limit, tileGridSize=(tiles, tiles))
+        self.out = np.empty((rows[1] - rows[0], cols[1] - cols[0]), np.uint8)
+        self.exact = h % tiles == 0 and w % tiles == 0
+        if not self.exact:
+            return
+        self._tile_h, self._tile_w = h // tiles, w // tiles
+        tile_px = self._tile_h * self._tile_w
+        # OpenCV: int(clipLimit * tileSizeTotal / histSize) in double, at least 1; scale in float32
+        self._clip = max(int(clip_limit * tile_px / _BINS), 1)
+        self._scale = np.float32(_BINS - 1) / np.float32(tile_px)
+        self._tile_rows = np.array(tiles_for(*rows, self._tile_h, tiles), np.int64)
+        self._tile_cols = np.array(tiles_for(*cols, self._tile_w, tiles), np.int64)
+        # tables of tiles outside the ranges stay 0 and are never read
+        self._pairs = np.zeros((tiles, tiles + 1, _BINS, 2), np.float32)
+        n_cols = cols[1] - cols[0]
+        self._columns = (
+            np.empty(n_cols, np.int64),
+            np.empty(n_cols, np.float32),
+            np.empty(n_cols, np.float32),
+        )
+        _column_weights(self._cols, self._tile_w, *self._columns)
+        self._ranges = np.stack([self._tile_rows, self._tile_cols, self._rows, self._cols])
+        self.exact = self._matches_opencv(h, w)
+
+    @property
+    def histogram_share(self) -> float:
+        """Fraction of the frame's pixels whose histograms are taken (1 on the OpenCV path)."""
+        if not self.exact:
+            return 1.0
+        tiles = self._pairs.shape[0]
+        return float(np.diff(self._tile_rows)[0] * np.diff(self._tile_cols)[0]) / tiles**2
+
+    def apply(self, gray: np.ndarray) -> np.ndarray:
+        """Equalise the crop of one uint8 frame of this object's frame shape into ``self.out``."""
+        if not self.exact:
+            np.copyto(self.out, self._opencv.apply(gray)[self._slices])
+            return self.out
+        _equalise(
+            gray, self._ranges, self._clip, self._scale, self._tile_h, self._tile_w, self._pairs,
+            self._columns, self.out,
+        )  # fmt: skip
+        return self.out
+
+    def _matches_opencv(self, h: int, w: int) -> bool:
+        """Whether the compiled path gives OpenCV's values on probe frames: a noisy ramp (tables
+        clipped), flat noise (most counts in a few bins: large residuals) and uniform noise."""
+        rng = np.random.default_rng(0)
+        ramp = np.linspace(10.0, 120.0, h)[:, None] + rng.normal(0.0, 9.0, (h, w))
+        probes = (
+            np.clip(ramp, 0, 255).astype(np.uint8),
+            np.clip(rng.normal(40.0, 2.0, (h, w)), 0, 255).astype(np.uint8),
+            rng.integers(0, 256, (h, w), dtype=np.uint8),
+        )
+        self.exact = True
+        for frame in probes:
+            if not np.array_equal(self.apply(frame), self._opencv.apply(frame)[self._slices]):
+                return False
+        return True
