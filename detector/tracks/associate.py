@@ -10,6 +10,12 @@ continue a track when it passes either gate:
   with distance (``base_gate_m + gate_per_m * forward_m``: one pixel of the bottom row is
   centimetres near the pole and half a metre at 20 m).
 
+Either gate needs the region's box area within ``max_area_ratio`` of the track's (either way):
+a speck of noise next to a walker whose body was not segmented this frame is no continuation
+of him, and taking it would move his box and ground point to the speck and lose him the next
+frame (night_walk frame 218). A body half-segmented (legs only, about a third of the area)
+still passes; a fragment so much smaller is left to reunification (``reunite``).
+
 Either gate suffices because each fails somewhere the other holds: the image gate loses a car
 at 15 m/s near the camera (it moves its own length in a few frames, but its ground prediction
 holds), the ground gate loses an insect whose bottom row jumps metres (which should still be
@@ -40,8 +46,11 @@ class Gates:
     max_centre_diag: float = 1.0
     base_gate_m: float = 1.0
     gate_per_m: float = 0.1
+    max_area_ratio: float = 8.0
 
     def __post_init__(self) -> None:
+        if not self.max_area_ratio >= 1.0:
+            raise ValueError(f"Gates.max_area_ratio: must be >= 1, got {self.max_area_ratio!r}")
         if not 0.0 <= self.min_iou <= 1.0:
             raise ValueError(f"Gates.min_iou: must be in [0, 1], got {self.min_iou!r}")
         for name in ("max_centre_diag", "base_gate_m", "gate_per_m"):
@@ -54,6 +63,7 @@ def pair_scores(
 ) -> list[tuple[float, int, int]]:
     """Allowed (score, track index, region index) pairs."""
     max_d = max(gates.max_centre_diag, 1e-9)
+    max_ratio = gates.max_area_ratio
     extents = [(bx, by, bx + bw, by + bh, bw * bh, bx + bw / 2, by + bh / 2) for bx, by, bw, bh in boxes_px]
     pairs = []
     for ti, track in enumerate(tracks):
@@ -64,6 +74,8 @@ def pair_scores(
         pf, pr = track.predicted_ground(frame)
         gate_m = gates.base_gate_m + gates.gate_per_m * abs(pf)
         for ri, (bx, by, b_right, b_bottom, b_area, bcx, bcy) in enumerate(extents):
+            if b_area * max_ratio < p_area or p_area * max_ratio < b_area:
+                continue
             dist = math.hypot(pcx - bcx, pcy - bcy) / diag
             iw = min(p_right, b_right) - max(px, bx)
             ih = min(p_bottom, b_bottom) - max(py, by)

@@ -85,8 +85,12 @@ class PlausibilityLimits:
 
 
 def note_acceleration(track: Track, limits: PlausibilityLimits) -> None:
-    """Record whether this frame's acceleration broke the bound (call once per observed frame)."""
-    accel = track.acceleration_mps2()
+    """Record whether this frame's acceleration broke the bound (call once per observed frame).
+
+    Not while the track ``settling`` (``detector.tracks.track.SETTLE_S``): its first velocities
+    are noise and their change is no acceleration.
+    """
+    accel = None if track.settling else track.acceleration_mps2()
     track.accel_violations.append(accel is not None and accel > limits.max_accel_mps2)
 
 

@@ -4,10 +4,12 @@ A ``Track`` keeps short windows of its history (positions, sizes, per-frame clas
 probabilities) so every figure it reports costs O(window) per frame, not O(life).
 
 Ground positions are in the camera's ground frame (``detector.tracks.ground``: forward and
-right of the pole foot, m). Velocities are differences over ``VELOCITY_WINDOW_S`` of positions
+right of the pole foot, m). Velocities come from the positions of the last ``VELOCITY_WINDOW_S``
 (a single frame's bottom row jitters by a pixel or more: 0.5 m at 20 m, 7 m/s at 15 frames/s;
-over half a second the same jitter is 1 m/s). Image velocities are px per frame of the box
-centre, for predicting the next box.
+over half a second the same jitter is 1 m/s), as the difference of the medians of the
+window's older and newer halves, so a bottom row that jumps for a few frames is no burst of
+speed (``_median_halves_velocity``). Image velocities are px per frame of the box's
+bottom centre, for predicting the next box.
 
 Pooling the per-frame class probabilities (``POOLINGS``) into P(target): ``mean_log`` (the
 default) averages the log-probabilities of the last ``POOL_FRAMES`` frames and renormalises:
@@ -29,6 +31,11 @@ from dataclasses import dataclass, field
 POOL_FRAMES = 15
 #: Positions spanning about this long give a track's ground velocity, s.
 VELOCITY_WINDOW_S = 0.5
+#: A track's first seconds, when its outline is least steady (an object entering the view, or
+#: one the background model is still learning around: a synthetic walker's ground point jumps
+#: 10 -> 12 -> 9.6 m in his first five frames). Its acceleration is not judged and its speed
+#: not averaged into ``mean_speed_mps`` until then.
+SETTLE_S = 1.0
 #: Frames of size history kept for the steadiness test.
 SIZE_FRAMES = 15
 #: Frames over which acceleration violations are counted.
@@ -57,6 +64,34 @@ def pool_probabilities(frames: deque | list, pooling: str = "mean_log") -> list[
     return [e / total for e in exp]
 
 
+def _median(values: list[float]) -> float:
+    ordered = sorted(values)
+    n = len(ordered)
+    return ordered[n // 2] if n % 2 else (ordered[n // 2 - 1] + ordered[n // 2]) / 2
+
+
+def _median_halves_velocity(positions, fps: float, min_span_frames: float) -> tuple[float, float] | None:
+    """(forward, right) velocity, m/s, from the medians of the window's older and newer halves.
+
+    Not the two end points: a region's bottom row can jump for a frame or a few (the feet lost
+    in the dark, a shadow or reflection joined below them: on the night_walk clip the walker's
+    ground point flips between 9 m and 5.7 m), and through the end points every such jump is a
+    burst of speed and, twice, of acceleration. The median of each half ignores jumps in fewer
+    than half its frames, and a steady motion gives the same velocity as the end points.
+    None while the halves' middle frames are under ``min_span_frames`` apart.
+    """
+    n = len(positions)
+    older, newer = list(positions)[: n // 2], list(positions)[n - n // 2:]
+    span_frames = _median([p[0] for p in newer]) - _median([p[0] for p in older])
+    if span_frames < min_span_frames:
+        return None
+    dt_s = span_frames / fps
+    return (
+        (_median([p[1] for p in newer]) - _median([p[1] for p in older])) / dt_s,
+        (_median([p[2] for p in newer]) - _median([p[2] for p in older])) / dt_s,
+    )
+
+
 @dataclass(slots=True)
 class Track:
     """The state of one track; ``TrackSet`` updates it, everyone else reads it."""
@@ -70,7 +105,7 @@ class Track:
     last_frame: int = 0
     sightings: int = 1
     missed: int = 0
-    image_velocity_px: tuple[float, float] = (0.0, 0.0)  # box centre, px per frame
+    image_velocity_px: tuple[float, float] = (0.0, 0.0)  # box bottom centre, px per frame
     velocity_mps: tuple[float, float] | None = None  # (forward, right), m/s; None until known
     #: (frame, forward_m, right_m), the last ``VELOCITY_WINDOW_S`` and a bit
     positions: deque = field(default_factory=deque)
@@ -78,6 +113,10 @@ class Track:
     velocities: deque = field(default_factory=deque)
     widths_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
     heights_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
+    #: box sizes in the image, px, and their medians (the prediction's size)
+    widths_px: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
+    heights_px: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
+    typical_size_px: tuple[float, float] = (0.0, 0.0)
     centres_x_px: deque = field(default_factory=lambda: deque(maxlen=SWAY_FRAMES))
     probabilities: deque = field(default_factory=lambda: deque(maxlen=POOL_FRAMES))
     pooled: list[float] = field(default_factory=list)
@@ -104,6 +143,10 @@ class Track:
     #: the last frame the track's ground speed was under the still limit (None: never)
     still_frame: int | None = None
 
+    def __post_init__(self) -> None:
+        if self.typical_size_px == (0.0, 0.0):  # until the first frame is noted: the given box
+            self.typical_size_px = (self.box_px[2], self.box_px[3])
+
     @property
     def speed_mps(self) -> float | None:
         if self.velocity_mps is None:
@@ -111,15 +154,32 @@ class Track:
         return math.hypot(*self.velocity_mps)
 
     @property
+    def settling(self) -> bool:
+        """Whether the track is in its first ``SETTLE_S`` (see there)."""
+        return self.last_frame - self.first_frame < SETTLE_S * self.fps
+
+    @property
     def mean_speed_mps(self) -> float | None:
         return self.speed_sum_mps / self.speed_frames if self.speed_frames else None
 
     def predicted_box(self) -> tuple[float, float, float, float]:
-        """The box moved on by its image velocity over the frames since it was last seen."""
+        """The last box, at least as wide and tall as the track's typical box (median width and
+        height of its last frames), standing on its last bottom centre moved on by its image
+        velocity over the frames since it was last seen.
+
+        At least typical: a frame where only the legs (or a speck) were segmented would
+        otherwise shrink the prediction to that piece, and the whole body the next frame would
+        no longer fit it; but a box grown since (a car coming closer, pieces joined into one
+        region by ``reunite``) is the size to expect. Standing on the bottom centre because the
+        feet are what a partly segmented body keeps (and what the ground point is).
+        """
         x, y, w, h = self.box_px
         vx, vy = self.image_velocity_px
         steps = self.missed + 1
-        return (x + vx * steps, y + vy * steps, w, h)
+        tw, th = self.typical_size_px
+        tw, th = max(tw, w), max(th, h)
+        cx, bottom = x + w / 2 + vx * steps, y + h + vy * steps
+        return (cx - tw / 2, bottom - th, tw, th)
 
     def predicted_ground(self, frame: int) -> tuple[float, float]:
         """(forward_m, right_m) at ``frame`` at the track's ground velocity (its last position if unknown)."""
@@ -133,14 +193,15 @@ class Track:
         x, y, w, h = box_px
         ox, oy, ow, oh = self.box_px
         steps = max(frame - self.last_frame, 1)
-        sx = ((x + w / 2) - (ox + ow / 2)) / steps
-        sy = ((y + h / 2) - (oy + oh / 2)) / steps
+        sx = ((x + w / 2) - (ox + ow / 2)) / steps  # of the bottom centre (see predicted_box)
+        sy = ((y + h) - (oy + oh)) / steps
         if self.sightings == 1:
             self.image_velocity_px = (sx, sy)
         else:
             vx, vy = self.image_velocity_px
             self.image_velocity_px = (smoothing * sx + (1 - smoothing) * vx, smoothing * sy + (1 - smoothing) * vy)
         self.box_px = list(box_px)
+        self._note_size_px(w, h)
         self.sightings += 1
         self.missed = 0
         self.last_frame = frame
@@ -178,7 +239,8 @@ class Track:
 
     def start(self, box_px, ground, features, probabilities) -> None:
         """The first frame's region (the fields the constructor did not set)."""
-        x, _, w, _ = box_px
+        x, _, w, h = box_px
+        self._note_size_px(w, h)
         self.last_frame = self.first_frame
         self.positions.append((self.first_frame, *ground))
         self.widths_m.append(features[0])
@@ -186,24 +248,28 @@ class Track:
         self.centres_x_px.append(x + w / 2)
         self._add_probabilities(probabilities)
 
+    def _note_size_px(self, w: float, h: float) -> None:
+        self.widths_px.append(w)
+        self.heights_px.append(h)
+        self.typical_size_px = (_median(self.widths_px), _median(self.heights_px))
+
     def _update_velocity(self, frame: int) -> None:
         positions = self.positions
         positions.append((frame, self.forward_m, self.right_m))
         window = VELOCITY_WINDOW_S * self.fps
         while len(positions) > 2 and frame - positions[1][0] >= window:
             positions.popleft()
-        f0, a0, b0 = positions[0]
-        if frame - f0 < self._min_span_frames():  # a frame or two of jitter is no velocity
+        velocity = _median_halves_velocity(positions, self.fps, self._min_span_frames())
+        if velocity is None:  # a frame or two of jitter is no velocity
             return
-        dt_s = (frame - f0) / self.fps
-        self.velocity_mps = ((self.forward_m - a0) / dt_s, (self.right_m - b0) / dt_s)
+        self.velocity_mps = velocity
         velocities = self.velocities
         velocities.append((frame, *self.velocity_mps))
         while len(velocities) > 2 and frame - velocities[1][0] >= window:
             velocities.popleft()
-        speed = math.hypot(*self.velocity_mps)
-        self.speed_sum_mps += speed
-        self.speed_frames += 1
+        if not self.settling:
+            self.speed_sum_mps += math.hypot(*self.velocity_mps)
+            self.speed_frames += 1
 
     def _min_span_frames(self) -> float:
         """Frames a difference must span: half the velocity window, at least 2."""

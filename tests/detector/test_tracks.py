@@ -218,3 +218,47 @@ def test_ground_gate_keeps_a_fast_car_whose_box_jumped():
     assert associate([car], [(160, 100, 30, 20)], [(8.0, 1.0)], 1, Gates()) == [0]
     # the same jump with the ground point 5 m off: no gate holds
     assert associate([car], [(160, 100, 30, 20)], [(8.0, 6.0)], 1, Gates()) == [-1]
+
+
+def test_a_speck_beside_a_walker_does_not_continue_his_track():
+    from detector.tracks.associate import Gates, associate
+
+    walker_track = _track(1, (100, 40, 30, 70), ground=(9.0, 0.0))
+    # this frame the body was not segmented; a 6 x 6 px speck lies by his feet (night_walk frame 218)
+    assert associate([walker_track], [(118, 104, 6, 6)], [(9.2, 0.3)], 1, Gates()) == [-1]
+    # his legs alone (a third of his box) still continue him
+    assert associate([walker_track], [(102, 80, 28, 30)], [(9.0, 0.1)], 1, Gates()) == [0]
+    with pytest.raises(ValueError, match="max_area_ratio"):
+        Gates(max_area_ratio=0.5)
+
+
+def test_after_a_legs_only_frame_the_prediction_keeps_the_whole_body():
+    from detector.tracks.track import Track
+
+    track = Track(1, 0, FPS, [100, 40, 30, 70], 9.0, 0.0)
+    track.start([100, 40, 30, 70], (9.0, 0.0), [0.5, 1.75], [0.1, 0.9, 0.0, 0.0, 0.0])
+    for k in range(1, 6):
+        track.observe(k, [100 + 2 * k, 40, 30, 70], (9.0, 0.1 * k), [0.5, 1.75], [0.1, 0.9, 0.0, 0.0, 0.0])
+    track.observe(6, [112, 80, 30, 30], (9.0, 0.6), [0.5, 0.7], [0.9, 0.1, 0.0, 0.0, 0.0])  # legs only
+    x, y, w, h = track.predicted_box()
+    assert (w, h) == (30, 70)  # the body's typical size, not the legs'
+    assert y + h == pytest.approx(110, abs=1.0)  # standing on the bottom row the legs share with the body
+    assert 112 < x + w / 2 - 15 < 118  # moving on to the right
+
+
+def test_a_bottom_row_that_jumps_for_a_few_frames_is_no_burst_of_speed():
+    from detector.tracks.track import Track
+
+    fps = 30.0
+    track = Track(1, 0, fps, [100, 40, 30, 70], 9.0, 0.0)
+    track.start([100, 40, 30, 70], (9.0, 0.0), [0.5, 1.75], [0.1, 0.9, 0.0, 0.0, 0.0])
+    speeds = []
+    for k in range(1, 60):
+        lateral_m = 1.4 * k / fps  # a walker at 1.4 m/s
+        # frames 30-32: the box swallows a reflection below his feet, the ground point 3 m nearer
+        forward_m = 6.0 if 30 <= k <= 32 else 9.0
+        track.observe(k, [100 + k, 40, 30, 70], (forward_m, lateral_m), [0.5, 1.75], [0.1, 0.9, 0.0, 0.0, 0.0])
+        if track.speed_mps is not None:
+            speeds.append(track.speed_mps)
+    assert max(speeds) < 2.0, max(speeds)  # through the end points: 3 m in half a second, 6 m/s
+    assert np.median(speeds) == pytest.approx(1.4, abs=0.05)
