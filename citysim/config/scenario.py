@@ -142,6 +142,11 @@ class ControllerSpec(Spec):
         description="detector_located: light zones a target enters within this many seconds "
         "(plus a class margin); default: ramp + radio latency + one frame",
     )
+    light_blind_ends: bool | None = Field(
+        default=None,
+        description="detector_located: keep an end lamp at full when no camera watches the approach "
+        "to its zone (whoever comes from there arrives unseen); default true",
+    )
     schedule: tuple[ScheduleStep, ...] = ()
 
     @model_validator(mode="before")

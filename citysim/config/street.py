@@ -31,11 +31,6 @@ VERGE_STEP_M = 0.5
 #: ... and this far off the kerb into the road, m.
 ROAD_STEP_M = 1.0
 
-#: Walkers passing each other may step this far beyond a sidewalk's outer edge (verge), m.
-VERGE_STEP_M = 0.5
-#: ... and this far off the kerb into the road, m.
-ROAD_STEP_M = 1.0
-
 
 class LaneSpec(Spec):
     y_center_m: float = Field(ge=-100, le=100)
@@ -179,6 +174,13 @@ class LampCameraSpec(Spec):
         description="one heading per lamp (deg CCW from +x), overriding heading_deg: e.g. the "
         "first camera looking back at the street's approach",
     )
+    back_heading_deg: float | None = Field(
+        default=None,
+        ge=-360,
+        le=360,
+        description="a second camera on every pole looking this way (deg CCW from +x), e.g. 188: "
+        "back along -x, turned 8 deg toward the road, so the stretch under each pole is seen",
+    )
     height_m: float | None = Field(default=None, gt=0, le=30)
     tilt_deg: float | None = None
     focal_mm: float | None = None
@@ -281,6 +283,11 @@ class LampsSpec(Spec):
                     raise FieldPathError(("camera", "headings_deg", i), f"must be in -360..360 deg, got {h:g}")
         self._camera_model = self._build_camera()
         return self
+
+    @property
+    def cameras_per_pole(self) -> int:
+        """1, or 2 with a backward camera (``camera.back_heading_deg``) on every pole."""
+        return 1 if self.camera.back_heading_deg is None else 2
 
     def heading_of(self, lamp_index: int) -> float:
         """Lamp ``lamp_index``'s camera heading, deg CCW from +x."""

@@ -1,7 +1,8 @@
 """What every controller shares: its context, the lamp bank of holds, and the base class.
 
 A controller owns one decision-maker per lamp and is fed by the simulation loop
-(``citysim.sim.loop``): camera frames at the camera's frame rate (only if ``uses_camera``),
+(``citysim.sim.loop``): camera frames at the camera's frame rate (only if ``uses_camera``; by
+camera index, ``ControlContext.camera_lamps`` saying which lamp each camera hangs on),
 agent snapshots at the physics rate (PIR needs them: it senses heat, not pixels) and network
 messages. It decides by calling ``bank.trigger`` (light this lamp now and keep it lit for the
 hold time) or by setting lamp targets; the ``LampBank`` releases lamps after the hold time.
@@ -40,6 +41,11 @@ class ControlContext:
     #: ones on rendered frames; in fast mode a sensor model (``citysim.fast.sensors.FastSensors``:
     #: ``detectors(ctx, threshold)`` and ``segmenters(ctx)``) with the same interface.
     sensors: object | None = None
+
+    @property
+    def camera_lamps(self) -> tuple[int, ...]:
+        """The lamp each camera hangs on, by camera index (``Street.cameras``: camera i is lamp i's own)."""
+        return self.street.camera_lamps
 
     @property
     def hold_s(self) -> float:
@@ -95,15 +101,16 @@ class Controller:
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         self.bank.release_expired(t_s)
 
-    def on_frame(self, lamp_index: int, t_s: float, image: np.ndarray) -> list | None:
-        """Handle one camera frame; return the detector's detections if there are any (for confusion metrics)."""
+    def on_frame(self, camera_index: int, t_s: float, image: np.ndarray) -> list | None:
+        """Handle one frame of camera ``camera_index`` (on lamp ``ctx.camera_lamps[camera_index]``);
+        return the detector's detections if there are any (for confusion metrics)."""
         return None
 
     def on_message(self, lamp_index: int, t_s: float, message) -> None:
         pass
 
-    def motion_seen(self, lamp_index: int) -> bool:
-        """Does this lamp's camera need every frame now? (see ``citysim.sim.cameras.CameraSchedule``)
+    def motion_seen(self, camera_index: int) -> bool:
+        """Does this camera need every frame now? (see ``citysim.sim.cameras.CameraSchedule``)
 
         True while its last judged frame held a moving region.
         """

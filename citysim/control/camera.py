@@ -14,7 +14,7 @@ from detector.segment import Segmenter, SegmenterParams
 
 
 class BackgroundClock:
-    """Frames each lamp camera has *taken* since its background model was (re)built.
+    """Frames each camera has *taken* since its background model was (re)built (by camera index).
 
     The simulator judges an idle camera only now and then (``citysim.sim.cameras.CameraSchedule``), but
     the camera takes every frame. MOG2's automatic learning rate, 1 / min(2 n, history), counts
@@ -22,15 +22,15 @@ class BackgroundClock:
     car coming head-on. So each judged frame is fed at the rate of the frames taken.
     """
 
-    def __init__(self, n_lamps: int, fps: float):
+    def __init__(self, n_cameras: int, fps: float):
         self.fps = fps
-        self.reset_at_s = [0.0] * n_lamps
+        self.reset_at_s = [0.0] * n_cameras
 
-    def reset(self, lamp_index: int, t_s: float) -> None:
-        self.reset_at_s[lamp_index] = t_s
+    def reset(self, camera_index: int, t_s: float) -> None:
+        self.reset_at_s[camera_index] = t_s
 
-    def frames_taken(self, lamp_index: int, t_s: float) -> int:
-        return int(round((t_s - self.reset_at_s[lamp_index]) * self.fps))
+    def frames_taken(self, camera_index: int, t_s: float) -> int:
+        return int(round((t_s - self.reset_at_s[camera_index]) * self.fps))
 
 
 class ForegroundThreshold(Controller):
@@ -51,28 +51,28 @@ class ForegroundThreshold(Controller):
         if ctx.sensors is not None:  # fast mode: a calibrated per-frame trigger model, same interface
             self.segmenters = ctx.sensors.segmenters(ctx)
         else:
-            self.segmenters = [Segmenter(SegmenterParams(), fps=1.0 / ctx.frame_period_s) for _ in ctx.lamps]
+            self.segmenters = [Segmenter(SegmenterParams(), fps=1.0 / ctx.frame_period_s) for _ in ctx.camera_lamps]
         self.light = LightChangeWatch(ctx)
-        self.last_counts = [0] * len(ctx.lamps)
-        self.clock = BackgroundClock(len(ctx.lamps), 1.0 / ctx.frame_period_s)
+        self.last_counts = [0] * len(ctx.camera_lamps)
+        self.clock = BackgroundClock(len(ctx.camera_lamps), 1.0 / ctx.frame_period_s)
 
-    def motion_seen(self, lamp_index):
-        return self.last_counts[lamp_index] > 0
+    def motion_seen(self, camera_index):
+        return self.last_counts[camera_index] > 0
 
-    def on_frame(self, lamp_index, t_s, image):
-        seg = self.segmenters[lamp_index]
-        light = self.light.check(lamp_index, t_s)
+    def on_frame(self, camera_index, t_s, image):
+        seg = self.segmenters[camera_index]
+        light = self.light.check(camera_index, t_s)
         if light == "changing":
             return None
         if light == "settled":
             seg.reset()
-            self.clock.reset(lamp_index, t_s)
-        rate = seg.automatic_learning_rate(self.clock.frames_taken(lamp_index, t_s))
+            self.clock.reset(camera_index, t_s)
+        rate = seg.automatic_learning_rate(self.clock.frames_taken(camera_index, t_s))
         regions = seg.apply(image, rate)
-        self.last_counts[lamp_index] = len(regions)
+        self.last_counts[camera_index] = len(regions)
         n_px = image.shape[0] * image.shape[1]
         if len(regions.areas_px) and regions.areas_px.max() > self.fraction * n_px:
-            self.bank.trigger(lamp_index, t_s)
+            self.bank.trigger(self.ctx.camera_lamps[camera_index], t_s)
         return None
 
 
@@ -89,7 +89,7 @@ class Threshold05(ForegroundThreshold):
 class LightChangeWatch:
     """Tells a camera's background model when the lighting it sees changes and settles.
 
-    The lamps that light a camera's view are its own and its neighbours'. While any of them ramps,
+    The lamps that light a camera's view are its pole's and the neighbours'. While any of them ramps,
     MOG2 sees the whole scene change, so frames are not judged (a lamp would otherwise keep itself
     lit: switching makes foreground, foreground switches). Once the light is steady the background
     model is rebuilt, as the paper's implementation does.
@@ -98,14 +98,14 @@ class LightChangeWatch:
     def __init__(self, ctx: ControlContext, neighbours: int = 1):
         self.ctx = ctx
         n = len(ctx.lamps)
-        self.watched = [list(range(max(0, i - neighbours), min(n, i + neighbours + 1))) for i in range(n)]
-        self.was_changing = [False] * n
+        self.watched = [list(range(max(0, i - neighbours), min(n, i + neighbours + 1))) for i in ctx.camera_lamps]
+        self.was_changing = [False] * len(ctx.camera_lamps)
 
-    def check(self, lamp_index: int, t_s: float) -> str:
+    def check(self, camera_index: int, t_s: float) -> str:
         """'changing' (skip this frame), 'settled' (rebuild the background, then judge) or 'steady'."""
-        changing = any(self.ctx.lamps[j].is_ramping(t_s) for j in self.watched[lamp_index])
-        was = self.was_changing[lamp_index]
-        self.was_changing[lamp_index] = changing
+        changing = any(self.ctx.lamps[j].is_ramping(t_s) for j in self.watched[camera_index])
+        was = self.was_changing[camera_index]
+        self.was_changing[camera_index] = changing
         if changing:
             return "changing"
         return "settled" if was else "steady"

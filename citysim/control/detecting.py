@@ -47,30 +47,31 @@ class DetectorPerFrame(Controller):
 
             model = default_model()
             tracking = self.tracking if ctx.spec.tracking is None else ctx.spec.tracking
+            # one detector per camera, with that camera's pose: its ground positions are the street's
             self.detectors = [Detector(site.camera, model=model, target_threshold=threshold, tracking=tracking)
-                              for site in ctx.street.lamps]  # fmt: skip
+                              for site in ctx.street.cameras]  # fmt: skip
         self.light = LightChangeWatch(ctx)
-        self.clock = BackgroundClock(len(ctx.lamps), 1.0 / ctx.frame_period_s)
+        self.clock = BackgroundClock(len(ctx.camera_lamps), 1.0 / ctx.frame_period_s)
 
-    def motion_seen(self, lamp_index):
-        return len(self.detectors[lamp_index].last_regions) > 0
+    def motion_seen(self, camera_index):
+        return len(self.detectors[camera_index].last_regions) > 0
 
-    def detect(self, lamp_index, t_s, image) -> list | None:
+    def detect(self, camera_index, t_s, image) -> list | None:
         """The detector's detections, or None while the light in view is changing (not judged)."""
-        det = self.detectors[lamp_index]
-        light = self.light.check(lamp_index, t_s)
+        det = self.detectors[camera_index]
+        light = self.light.check(camera_index, t_s)
         if light == "changing":
             return None
         if light == "settled":
             det.reset_background()
-            self.clock.reset(lamp_index, t_s)
-        rate = det.segmenter.automatic_learning_rate(self.clock.frames_taken(lamp_index, t_s))
+            self.clock.reset(camera_index, t_s)
+        rate = det.segmenter.automatic_learning_rate(self.clock.frames_taken(camera_index, t_s))
         return det.process(image, rate)
 
-    def on_frame(self, lamp_index, t_s, image):
-        detections = self.detect(lamp_index, t_s, image)
-        if detections and self.detectors[lamp_index].is_target(detections):
-            self.bank.trigger(lamp_index, t_s)
+    def on_frame(self, camera_index, t_s, image):
+        detections = self.detect(camera_index, t_s, image)
+        if detections and self.detectors[camera_index].is_target(detections):
+            self.bank.trigger(self.ctx.camera_lamps[camera_index], t_s)
         return detections
 
 
@@ -108,23 +109,23 @@ class DetectorConfirmed(DetectorPerFrame):
         # the paper's implementation switches when 2 of the last 6 frames hold a target
         self.k = ctx.spec.k or 2
         self.n = ctx.spec.n or 6
-        self.windows = [TrackWindows(self.k, self.n) for _ in ctx.lamps]
+        self.windows = [TrackWindows(self.k, self.n) for _ in ctx.camera_lamps]
 
-    def confirmed_tracks(self, lamp_index, detections) -> set:
+    def confirmed_tracks(self, camera_index, detections) -> set:
         """Record this frame's target decisions per track; the keys of the tracks now confirmed."""
-        det = self.detectors[lamp_index]
+        det = self.detectors[camera_index]
         hits: dict = {}
         for d in detections:
             hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
-        return self.windows[lamp_index].update(hits)
+        return self.windows[camera_index].update(hits)
 
-    def confirmed(self, lamp_index, detections) -> bool:
-        return bool(self.confirmed_tracks(lamp_index, detections))
+    def confirmed(self, camera_index, detections) -> bool:
+        return bool(self.confirmed_tracks(camera_index, detections))
 
-    def on_frame(self, lamp_index, t_s, image):
-        detections = self.detect(lamp_index, t_s, image)
-        if detections is not None and self.confirmed(lamp_index, detections):
-            self.bank.trigger(lamp_index, t_s)
+    def on_frame(self, camera_index, t_s, image):
+        detections = self.detect(camera_index, t_s, image)
+        if detections is not None and self.confirmed(camera_index, detections):
+            self.bank.trigger(self.ctx.camera_lamps[camera_index], t_s)
         return detections
 
 
@@ -150,19 +151,19 @@ class DetectorNetwork(DetectorConfirmed):
         super().__init__(ctx)
         self.lamps_ahead = ctx.network.spec.neighbours_ahead.model_dump()
         self.repeat_s = ctx.network.spec.repeat_s
-        self.last_sent_s = np.full(len(ctx.lamps), -math.inf)
-        self.last_x_m: list[dict[int, tuple[float, float]]] = [{} for _ in ctx.lamps]
+        self.last_sent_s = np.full(len(ctx.camera_lamps), -math.inf)
+        self.last_x_m: list[dict[int, tuple[float, float]]] = [{} for _ in ctx.camera_lamps]
 
-    def _direction(self, lamp_index, t_s, det) -> int:
+    def _direction(self, camera_index, t_s, det) -> int:
         """+1 / -1 along x from the track's ground velocity (or positions), 0 when not yet known."""
         if det.velocity_x_mps is not None:
             return 0 if abs(det.velocity_x_mps) < 0.3 else int(np.sign(det.velocity_x_mps))
-        cam = self.ctx.street.lamps[lamp_index].camera
+        cam = self.ctx.street.cameras[camera_index].camera
         x, y, w, h = det.box_px
         ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]]))[0]
         if not np.isfinite(ground[0]) or det.track_id is None:
             return 0
-        seen = self.last_x_m[lamp_index]
+        seen = self.last_x_m[camera_index]
         prev = seen.get(det.track_id)
         seen[det.track_id] = (t_s, float(ground[0]))
         if prev is None or t_s - prev[0] <= 0:
@@ -170,24 +171,25 @@ class DetectorNetwork(DetectorConfirmed):
         vx = (ground[0] - prev[1]) / (t_s - prev[0])
         return 0 if abs(vx) < 0.3 else int(np.sign(vx))
 
-    def on_frame(self, lamp_index, t_s, image):
-        detections = self.detect(lamp_index, t_s, image)
+    def on_frame(self, camera_index, t_s, image):
+        detections = self.detect(camera_index, t_s, image)
         if detections is None:
             return detections
-        confirmed = self.confirmed_tracks(lamp_index, detections)
+        confirmed = self.confirmed_tracks(camera_index, detections)
         if not confirmed:
             return detections
+        lamp_index = self.ctx.camera_lamps[camera_index]
         self.bank.trigger(lamp_index, t_s)
-        det = self.detectors[lamp_index]
+        det = self.detectors[camera_index]
         targets = [d for d in detections if d.track_id in confirmed and d.cls != "noise" and det.is_target([d])]
-        if not targets or t_s - self.last_sent_s[lamp_index] < self.repeat_s:
+        if not targets or t_s - self.last_sent_s[camera_index] < self.repeat_s:
             if targets:
                 # keep tracking directions between notifications
                 for d in targets:
-                    self._direction(lamp_index, t_s, d)
+                    self._direction(camera_index, t_s, d)
             return detections
         best = max(targets, key=lambda d: self.lamps_ahead.get(_cls(d), 1))
-        direction = self._direction(lamp_index, t_s, best)
+        direction = self._direction(camera_index, t_s, best)
         ahead = self.lamps_ahead.get(_cls(best), 1)
         n = len(self.ctx.lamps)
         if direction == 0:
@@ -196,7 +198,7 @@ class DetectorNetwork(DetectorConfirmed):
             receivers = [lamp_index + direction * k for k in range(1, ahead + 1) if 0 <= lamp_index + direction * k < n]
         if receivers:
             self.ctx.network.send(lamp_index, receivers, "light", {"cls": _cls(best)})
-            self.last_sent_s[lamp_index] = t_s
+            self.last_sent_s[camera_index] = t_s
         return detections
 
     def on_message(self, lamp_index, t_s, message):

@@ -14,12 +14,19 @@ lights:
   latency and jitter, one camera frame and a class margin (a vehicle at 60 km/h needs several
   zones ahead lit before it arrives).
 
-The camera's own lamp is switched directly; others are told over the simulated network (its
-latency, jitter and loss apply), a message repeated every ``network.repeat_s`` while the need
-lasts. Each lamp is released once nothing located is in or heading into its zone, plus the
-hold time. A track lost from view (it left the camera's 25 m, or walks under the pole where no
-camera looks) is extrapolated at its last velocity for a bounded distance and time, so the
-zones it walks into are lit before another camera picks it up. A track whose ground speed is
+The camera's own lamp (the pole it hangs on: with two cameras per pole, ``Street.cameras``, each
+camera's tracks are placed with that camera's pose and lit from its pole) is switched directly;
+others are told over the simulated network (its latency, jitter and loss apply), a message
+repeated every ``network.repeat_s`` while the need lasts. Each lamp is released once nothing
+located is in or heading into its zone, plus the hold time. A track lost from view (it left the
+camera's 25 m, or walks under the pole where no camera looks) is extrapolated at its last
+velocity for a bounded distance and time per class (cars and bicycles, which keep their lane
+and which the detector loses often, much further than walkers), so the zones it goes into are
+lit before another camera picks it up. A car or bicycle whose velocity is not yet measured is
+taken to go its lane's way at a brisk speed (``LANE_PRIOR_MPS``). An end lamp whose approach
+no camera watches (``world.coverage.approaches_seen``: suburban_night's first, whose camera
+looks away from the street's start) is kept at full: whoever comes from there is seen by no
+camera before entering its zone (``light_blind_ends`` false turns this off). A track whose ground speed is
 beyond any road user's (an insect near the lens seen as far away and fast) is not a target:
 the detector's tracks already reject those (``detector.tracks.plausibility``); the check here
 stays for detections without a track.
@@ -38,12 +45,29 @@ from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
 from citysim.control.detecting import DetectorPerFrame, TrackWindows
 from citysim.world.agents import AgentState
+from citysim.world.coverage import approaches_seen
+from citysim.world.street import Street
 
 #: Extra lead per detector class, s: beyond the ramp and the radio, for what the estimate misses.
 CLASS_MARGIN_S = {"pedestrian": 1.0, "group": 1.0, "cyclist": 1.5, "vehicle": 2.0}
-#: A lost track is extrapolated this far and this long at most (the blind stretch under a pole is ~12 m).
-EXTRAPOLATE_M = 20.0
-EXTRAPOLATE_S = 20.0
+#: A lost track is extrapolated this far (m) and this long (s) at most, per class. A walker going -x
+#: is lost 6 m before a pole (the forward camera's near edge) and picked up 5 m past it, 15 m before
+#: the next zone: 30 m covers that with margin. Cars and bicycles keep their lane from one street end
+#: to the other, and the detector loses them often (headlight glare toward the camera, a dark back
+#: going away): on suburban_night, seed 1, a car coming toward the cameras was placed by cameras 9
+#: and 8 and then by none of the next six, so cars are carried 240 m (eight zones; 20 s at 43 km/h),
+#: bicycles 120 m.
+EXTRAPOLATE_M = {"pedestrian": 30.0, "group": 30.0, "cyclist": 120.0, "vehicle": 240.0}
+EXTRAPOLATE_S = {"pedestrian": 25.0, "group": 25.0, "cyclist": 20.0, "vehicle": 20.0}
+#: The detector's velocity of a track is the median of its last this many (one frame's bad bottom row,
+#: a car's glare, can give a car coming at 9 m/s a velocity of 2.7 m/s).
+VELOCITY_MEDIAN_N = 5
+#: Until its velocity is measured, a car or bicycle on a lane is taken to go the lane's way at this
+#: speed (m/s; 50 km/h and 22 km/h, the fast end of suburban traffic): the zones ahead are lit from
+#: its first confirmed frame, not half a second later.
+LANE_PRIOR_MPS = {"vehicle": 50.0 / 3.6, "cyclist": 6.0}
+#: A ground point this close to a lane (beyond its edge, m) is on it: cyclists ride near the edge.
+LANE_SLACK_M = 0.5
 #: Ground positions used for the velocity estimate, s.
 VELOCITY_WINDOW_S = 1.0
 #: Slower than this along the street, the direction is unknown: light around the position.
@@ -60,7 +84,14 @@ class LocatedTrack:
 
     cls: str
     seen: deque = field(default_factory=lambda: deque(maxlen=64))  # (t_s, x_m)
+    velocities: deque = field(default_factory=lambda: deque(maxlen=VELOCITY_MEDIAN_N))  # the detector's, m/s
     vx_mps: float | None = None  # along the street; None until known
+    prior_vx_mps: float | None = None  # its lane's way at the class's prior speed, until vx_mps is known
+
+    @property
+    def heading_vx_mps(self) -> float | None:
+        """The measured velocity along the street, else the lane prior, else None (m/s)."""
+        return self.vx_mps if self.vx_mps is not None else self.prior_vx_mps
 
     @property
     def last(self) -> tuple[float, float]:
@@ -70,7 +101,8 @@ class LocatedTrack:
         """One ground position along the street; ``vx_mps`` the detector's velocity when it has one."""
         self.seen.append((t_s, x_m))
         if vx_mps is not None:
-            self.vx_mps = vx_mps
+            self.velocities.append(vx_mps)
+            self.vx_mps = float(np.median(self.velocities))
             return
         recent = [(t, x) for t, x in self.seen if t >= t_s - VELOCITY_WINDOW_S]
         if len(recent) >= 3 and recent[-1][0] - recent[0][0] >= 0.3:
@@ -79,7 +111,17 @@ class LocatedTrack:
 
     def predicted_x_m(self, t_s: float) -> float:
         t_last, x_last = self.last
-        return x_last + (self.vx_mps or 0.0) * (t_s - t_last)
+        return x_last + (self.heading_vx_mps or 0.0) * (t_s - t_last)
+
+
+def blind_end_lamps(street: Street) -> list[int]:
+    """The chain's end lamps whose approach no camera watches (``approaches_seen`` under half):
+    whoever comes from there enters the end zone before any camera could have seen them."""
+    first_seen, last_seen = approaches_seen(street)
+    ends = [0] if first_seen < 0.5 else []
+    if last_seen < 0.5 and len(street.lamps) - 1 not in ends:
+        ends.append(len(street.lamps) - 1)
+    return ends
 
 
 class DetectorLocated(DetectorPerFrame):
@@ -99,13 +141,26 @@ class DetectorLocated(DetectorPerFrame):
         if ctx.spec.lead_s is not None:
             self.base_lead_s = ctx.spec.lead_s
         self.repeat_s = net.repeat_s
-        self.tracks: dict[tuple[int, int], LocatedTrack] = {}
+        self.tracks: dict[tuple[int, int], LocatedTrack] = {}  # (camera, track id) -> track
         self.told_s: dict[tuple[int, int], float] = {}  # (camera lamp, lamp told) -> last message time
         self.next_extrapolation_s = 0.0
-        self.windows = [TrackWindows(ctx.spec.k or 2, ctx.spec.n or 6) for _ in ctx.lamps]
+        self.windows = [TrackWindows(ctx.spec.k or 2, ctx.spec.n or 6) for _ in ctx.camera_lamps]
+        self.lanes = [(lane.y_center_m - lane.width_m / 2 - LANE_SLACK_M, lane.y_center_m + lane.width_m / 2
+                       + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
+        self.blind_end_lamps = blind_end_lamps(ctx.street) if ctx.spec.light_blind_ends in (None, True) else []
+        self.next_blind_end_s = 0.0
 
     def lead_s(self, cls: str) -> float:
         return self.base_lead_s + CLASS_MARGIN_S.get(cls, 1.0)
+
+    def lane_prior_mps(self, cls: str, y_m: float | None) -> float | None:
+        """A car's or bicycle's velocity along the street before it is measured: its lane's way at
+        the class's prior speed (m/s); None off the lanes or for walkers (they go either way)."""
+        speed = LANE_PRIOR_MPS.get(cls)
+        if speed is None or y_m is None:
+            return None
+        ways = {d for lo, hi, d in self.lanes if lo <= y_m <= hi}
+        return speed * ways.pop() if len(ways) == 1 else None
 
     def zones_for(self, x_m: float, vx_mps: float | None, cls: str) -> np.ndarray:
         """The zones a target at ``x_m`` moving at ``vx_mps`` is in or enters within its lead time."""
@@ -128,20 +183,21 @@ class DetectorLocated(DetectorPerFrame):
         if remote:
             self.ctx.network.send(camera_lamp, remote, "light", {})
 
-    def on_frame(self, lamp_index, t_s, image):
-        detections = self.detect(lamp_index, t_s, image)
+    def on_frame(self, camera_index, t_s, image):
+        detections = self.detect(camera_index, t_s, image)
         if detections is not None:
-            self.place(lamp_index, t_s, detections)
+            self.place(camera_index, t_s, detections)
         return detections
 
-    def place(self, lamp_index: int, t_s: float, detections) -> None:
-        """Put camera ``lamp_index``'s confirmed target tracks on the street and light for them."""
-        det = self.detectors[lamp_index]
+    def place(self, camera_index: int, t_s: float, detections) -> None:
+        """Put camera ``camera_index``'s confirmed target tracks on the street (with that camera's
+        pose: its detector's) and light for them from the camera's lamp."""
+        det = self.detectors[camera_index]
         cam = det.camera
         hits: dict = {}
         for d in detections:
             hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
-        confirmed = self.windows[lamp_index].update(hits)
+        confirmed = self.windows[camera_index].update(hits)
         for d in detections:
             if d.track_id is None or d.track_id not in confirmed or not det.is_target([d]):
                 continue
@@ -149,23 +205,32 @@ class DetectorLocated(DetectorPerFrame):
             if cls == "noise":
                 continue
             if d.ground_x_m is not None:
-                ground_x_m = d.ground_x_m
+                ground_x_m, ground_y_m = d.ground_x_m, d.ground_y_m
             else:
                 x, y, w, h = d.box_px
                 ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]], dtype=np.float64))[0]
                 if not np.all(np.isfinite(ground)):
                     continue
-                ground_x_m = float(ground[0])
-            key = (lamp_index, d.track_id)
+                ground_x_m, ground_y_m = float(ground[0]), float(ground[1])
+            key = (camera_index, d.track_id)
             track = self.tracks.setdefault(key, LocatedTrack(cls))
-            track.cls = cls
+            # a track keeps the class carried furthest it was seen as: a car's class flips to cyclist,
+            # group or pedestrian in glare, never the other way for long
+            if EXTRAPOLATE_M.get(cls, 0.0) > EXTRAPOLATE_M.get(track.cls, 0.0):
+                track.cls = cls
             track.observe(t_s, ground_x_m, d.velocity_x_mps)
             if track.vx_mps is not None and abs(track.vx_mps) > IMPLAUSIBLE_MPS:
                 continue  # nothing on the street moves like that: an insect at the lens, a flicker
-            self.light_zones(lamp_index, t_s, self.zones_for(ground_x_m, track.vx_mps, track.cls))
+            track.prior_vx_mps = self.lane_prior_mps(cls, ground_y_m)
+            zones = self.zones_for(ground_x_m, track.heading_vx_mps, track.cls)
+            self.light_zones(self.ctx.camera_lamps[camera_index], t_s, zones)
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)
+        if self.blind_end_lamps and t_s >= self.next_blind_end_s:
+            self.next_blind_end_s = t_s + 1.0
+            for j in self.blind_end_lamps:
+                self.bank.trigger(j, t_s)
         if t_s < self.next_extrapolation_s:
             return
         self.next_extrapolation_s = t_s + 0.25
@@ -173,14 +238,17 @@ class DetectorLocated(DetectorPerFrame):
         for key, track in list(self.tracks.items()):
             t_last, _ = track.last
             gone_s = t_s - t_last
-            travelled_m = abs(track.vx_mps or 0.0) * gone_s
-            if gone_s > EXTRAPOLATE_S or travelled_m > EXTRAPOLATE_M or track.vx_mps is None:
+            vx_mps = track.heading_vx_mps
+            travelled_m = abs(vx_mps or 0.0) * gone_s
+            if (gone_s > EXTRAPOLATE_S.get(track.cls, 20.0) or travelled_m > EXTRAPOLATE_M.get(track.cls, 20.0)
+                    or vx_mps is None):
                 if gone_s > stale_after_s:
                     del self.tracks[key]
                 continue
-            if gone_s <= stale_after_s or abs(track.vx_mps) > IMPLAUSIBLE_MPS:
+            if gone_s <= stale_after_s or abs(vx_mps) > IMPLAUSIBLE_MPS:
                 continue
-            self.light_zones(key[0], t_s, self.zones_for(track.predicted_x_m(t_s), track.vx_mps, track.cls))
+            self.light_zones(self.ctx.camera_lamps[key[0]], t_s,
+                             self.zones_for(track.predicted_x_m(t_s), vx_mps, track.cls))
 
     def on_message(self, lamp_index, t_s, message):
         if message.kind == "light":

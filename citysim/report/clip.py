@@ -70,7 +70,7 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
                     writer.write(_clip_frame(frame, detector, stats))
         finally:
             writer.release()
-        plot_topdown(night.street, [s.camera for s in night.street.lamps], {i: np.array(p) for i, p in tracks.items()},
+        plot_topdown(night.street, [s.camera for s in night.street.cameras], {i: np.array(p) for i, p in tracks.items()},
                      stage / "topdown.png")
     return stats
 

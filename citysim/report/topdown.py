@@ -128,7 +128,7 @@ def plot_coverage_map(street: Street, path: str | Path) -> Path:
     blind ground."""
     from citysim.world.coverage import coverage_grid
 
-    return plot_topdown(street, [site.camera for site in street.lamps], None, path, coverage=coverage_grid(street))
+    return plot_topdown(street, [site.camera for site in street.cameras], None, path, coverage=coverage_grid(street))
 
 
 def _draw_sidewalks(ax: Axes, street: Street) -> None:

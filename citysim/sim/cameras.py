@@ -18,7 +18,7 @@ from citysim.world.street import Street
 
 
 class CameraSchedule:
-    """Which lamp cameras are judged this frame: every one that may see something, the rest sparsely.
+    """Which cameras (``Street.cameras``, by camera index) are judged this frame: every one that may see something, the rest sparsely.
 
     A camera is *busy* when an agent stands in its view (projected inside the frame, with a margin
     for what is about to enter), when the light in its view is changing, or when its last judged
@@ -35,10 +35,12 @@ class CameraSchedule:
     MAX_FORWARD_M = 40.0
 
     def __init__(self, street: Street, idle_stride: int):
-        self.cameras = [site.camera for site in street.lamps]
+        self.cameras = [site.camera for site in street.cameras]
         self.idle_stride = idle_stride
         self.n = len(self.cameras)
-        self.watch = [list(range(max(0, i - 1), min(self.n, i + 2))) for i in range(self.n)]
+        n_lamps = len(street.lamps)
+        # the lamps lighting each camera's view: its pole's and the neighbours'
+        self.watch = [list(range(max(0, c.lamp - 1), min(n_lamps, c.lamp + 2))) for c in street.cameras]
         self._poles_m = np.array([cam.position_m[:2] for cam in self.cameras]).reshape(-1, 2)
         self._headings = np.array([cam.heading_unit for cam in self.cameras]).reshape(-1, 2)
 
@@ -77,7 +79,8 @@ class CameraSchedule:
 def film(night, renderers, controller, lamps: Sequence[Lamp], collectors: Sequence[Collector]):
     """simpy process: every camera frame at the cameras' frame rate, judged where scheduled.
 
-    Frames are taken at k / fps; a frame shows the agents of the latest physics step.
+    Frames are taken at k / fps; a frame shows the agents of the latest physics step. The controller
+    and the collectors get the camera index (``Street.cameras``; camera i is lamp i's own).
     """
     env = night.env
     fps = night.street.lamps[0].camera.fps

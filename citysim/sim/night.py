@@ -6,9 +6,10 @@ of a night (``citysim run``'s loop, ``citysim render``, the paper reproduction, 
 builds it here, so the same seed always means the same people, cars and sensor noise.
 
 ``Night.start_physics(on_step)`` adds the process that steps the world at ``physics_hz`` and
-hands each step's agent snapshots to ``on_step``; ``Night.renderer(lamp)`` is that lamp
-camera's renderer, fed by its own child of the render stream (one per lamp, split once, in
-lamp order), so a camera's noise does not depend on which other cameras are rendered.
+hands each step's agent snapshots to ``on_step``; ``Night.renderer(camera)`` is that camera's
+renderer (``Street.cameras``: camera i hangs on lamp i, backward cameras follow), fed by its own
+child of the render stream (one per camera, split once, in camera order), so a camera's noise
+does not depend on which other cameras are rendered.
 
 ``build_night(scenario, replay=...)`` is the same night with the world's agents read back from a
 recording (``citysim.sim.replay``) instead of stepped: no traffic process runs and the world is
@@ -105,25 +106,34 @@ class Night:
         if t_s > self.env.now:
             self.env.run(until=t_s)
 
+    @property
+    def n_cameras(self) -> int:
+        """Lamp cameras: one per pole, two with ``lamps.camera.back_heading_deg``."""
+        return len(self.street.cameras)
+
     def camera_streams(self) -> list[np.random.Generator]:
-        """One render stream per lamp camera, split once off the render stream, in lamp order."""
+        """One render stream per camera, split once off the render stream, in camera order.
+
+        The first n_lamps children are the same whether or not backward cameras follow them, so
+        adding backward cameras leaves the forward cameras' noise as it was.
+        """
         if self._camera_streams is None:
-            self._camera_streams = self.streams["render"].spawn(self.n_lamps)
+            self._camera_streams = self.streams["render"].spawn(self.n_cameras)
         return self._camera_streams
 
-    def renderer(self, lamp_index: int) -> CameraRenderer:
-        """The renderer of one lamp's camera under the scenario's environment."""
+    def renderer(self, camera_index: int) -> CameraRenderer:
+        """The renderer of one camera (``Street.cameras``; camera i is lamp i's own) under the scenario's environment."""
         # imported here: the renderer loads numba (~150 MB), which light controllers never need
         from citysim.render.camera import CameraRenderer
 
-        if not 0 <= lamp_index < self.n_lamps:
-            raise IndexError(f"lamp: must be in 0..{self.n_lamps - 1}, got {lamp_index}")
-        site = self.street.lamps[lamp_index]
+        if not 0 <= camera_index < self.n_cameras:
+            raise IndexError(f"camera: must be in 0..{self.n_cameras - 1}, got {camera_index}")
+        site = self.street.cameras[camera_index]
         env = self.scenario.environment
-        return CameraRenderer(site.camera, self.street, env, self.camera_streams()[lamp_index])
+        return CameraRenderer(site.camera, self.street, env, self.camera_streams()[camera_index])
 
-    def renderers(self, lamps: Sequence[int] | None = None) -> list[CameraRenderer]:
-        return [self.renderer(i) for i in (range(self.n_lamps) if lamps is None else lamps)]
+    def renderers(self, cameras: Sequence[int] | None = None) -> list[CameraRenderer]:
+        return [self.renderer(i) for i in (range(self.n_cameras) if cameras is None else cameras)]
 
 
 def build_night(scenario: Scenario, replay: AgentSource | None = None) -> Night:

@@ -53,12 +53,12 @@ def _bands(street: Street) -> list[tuple[float, float]]:
 
 
 def seen_grid(street: Street, xs_m: np.ndarray, ys_m: np.ndarray, range_m: float) -> np.ndarray:
-    """Boolean (len(xs), len(ys)): is a person standing at (x, y) seen by some lamp camera?"""
+    """Boolean (len(xs), len(ys)): is a person standing at (x, y) seen by some camera (``Street.cameras``)?"""
     gx, gy = np.meshgrid(xs_m, ys_m, indexing="ij")
     ground = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
     head = ground + [0.0, 0.0, PERSON_HEIGHT_M]
     seen = np.zeros(gx.size, dtype=bool)
-    for site in street.lamps:
+    for site in street.cameras:
         cam = site.camera
         forward = cam.forward_and_lateral_m(ground[:, :2])[:, 0]
         near = (forward > 0.0) & (forward <= range_m)
@@ -118,3 +118,22 @@ def blind_stretches_m(grid: CoverageGrid) -> tuple[tuple[float, float], ...]:
     if run_start is not None:
         stretches.append((float(run_start), float(grid.end_m)))
     return tuple(stretches)
+
+
+#: How deep the approach to an end zone must be watched for its lamp to wait for what comes, m:
+#: a car at 60 km/h covers 10 m in 0.6 s, about a confirmation (6 frames at 15 fps) and a ramp.
+APPROACH_WATCH_M = 10.0
+
+
+def approaches_seen(street: Street, range_m: float = 25.0, step_m: float = 0.5,
+                    depth_m: float = APPROACH_WATCH_M) -> tuple[float, float]:
+    """Share of the lanes and sidewalks seen on the ``depth_m`` before the first lamp zone and after
+    the last one (0..1 each): whoever comes from an unseen approach enters its end zone unannounced."""
+    start_m = min(s.zone_start_m for s in street.lamps)
+    end_m = max(s.zone_end_m for s in street.lamps)
+    ys_m = np.concatenate([np.arange(lo + step_m / 2, hi, step_m) for lo, hi in _bands(street)])
+    shares = []
+    for lo_m, hi_m in ((start_m - depth_m, start_m), (end_m, end_m + depth_m)):
+        xs_m = np.arange(lo_m + step_m / 2, hi_m, step_m)
+        shares.append(float(seen_grid(street, xs_m, ys_m, range_m).mean()) if len(xs_m) else 0.0)
+    return shares[0], shares[1]

@@ -21,7 +21,6 @@ if TYPE_CHECKING:
     from citysim.config.street import ScenerySpec
 
 
-
 @dataclass(frozen=True)
 class Lane:
     y_center_m: float
@@ -59,6 +58,16 @@ class LampSite:
     camera: CameraModel  # x_m, y_m, yaw_deg set to this pole
     zone_start_m: float  # the stretch of street (x) this lamp is responsible for
     zone_end_m: float
+    back_camera: CameraModel | None = None  # a second camera on the pole (``lamps.camera.back_heading_deg``)
+
+
+@dataclass(frozen=True)
+class CameraSite:
+    """One camera of the street and the lamp (pole) it hangs on; ``index`` numbers frames and detectors."""
+
+    index: int
+    lamp: int
+    camera: CameraModel
 
 
 @dataclass(frozen=True)
@@ -75,6 +84,22 @@ class Street:
     crossings_x_m: tuple[
         float, ...
     ] = ()  # where pedestrians prefer to cross (the renderer may mark them)
+
+    @property
+    def cameras(self) -> tuple[CameraSite, ...]:
+        """Every camera: first each pole's own (camera i on lamp i), then the backward ones in lamp order.
+
+        With one camera per pole, camera and lamp indices coincide.
+        """
+        own = [CameraSite(i, site.index, site.camera) for i, site in enumerate(self.lamps)]
+        back = [site for site in self.lamps if site.back_camera is not None]
+        n = len(own)
+        return tuple(own + [CameraSite(n + k, site.index, site.back_camera) for k, site in enumerate(back)])
+
+    @property
+    def camera_lamps(self) -> tuple[int, ...]:
+        """The lamp each camera (by camera index) hangs on."""
+        return tuple(c.lamp for c in self.cameras)
 
     @property
     def road_center_y_m(self) -> float:
@@ -138,6 +163,8 @@ def build_street(scenario: Scenario, rng: np.random.Generator | None = None) -> 
             else base.placed(x_m=x, y_m=lamps.y_m, yaw_deg=lamps.heading_of(i)),
             zone_start_m=z0,
             zone_end_m=z1,
+            back_camera=None if lamps.camera.back_heading_deg is None
+            else base.placed(x_m=x, y_m=lamps.y_m, yaw_deg=lamps.camera.back_heading_deg),
         )
         for i, (x, (z0, z1)) in enumerate(
             zip(lamps.positions_x_m, lamps.zones(spec.length_m), strict=True)

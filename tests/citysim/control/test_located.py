@@ -70,3 +70,45 @@ def test_the_detectors_ground_velocity_is_used_when_the_track_has_one():
     track = controller.tracks[(1, 9)]
     # two positions: too few for the controller's own fit (3 over 0.3 s); the detector's velocity is there
     assert track.vx_mps == 12.0 and track.last == (0.1, 60.0)
+
+
+def vehicle_detection(x_m: float, y_m: float, track_id: int = 11) -> Detection:
+    """A confirmed-target car track's detection placed by the detector at (x_m, y_m), its velocity not yet known."""
+    probabilities = np.array([0.02, 0.02, 0.03, 0.9, 0.03])
+    return Detection((150, 150, 40, 30), np.zeros(6), "vehicle", probabilities, 0.95, track_id, track_cls="vehicle",
+                     track_p_target=0.93, track_target=True, ground_x_m=x_m, ground_y_m=y_m)
+
+
+def test_a_car_on_the_lane_toward_the_camera_lights_the_zones_it_is_heading_into_before_its_speed_is_known():
+    scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
+    night = build_night(scenario)
+    controller = build_controller(night, ControllerSpec(name="detector_located", light_blind_ends=False))
+    k = 4
+    site = night.street.lamps[k]
+    x_m = site.x_m + 20.0  # in zone k + 1, on the lane toward -x (y = +1.6 m), coming at camera k
+    for t_s in (0.0, 1 / 15):  # confirmed (2 of 6), too few positions for a velocity of its own
+        controller.place(k, t_s, [vehicle_detection(x_m, 1.6)])
+    track = controller.tracks[(k, 11)]
+    assert track.vx_mps is None and track.heading_vx_mps < 0  # the lane's way, before it is measured
+    lamps = controller.ctx.lamps
+    # at 50 km/h for the vehicle's lead (ramp + radio + frame + 2 s: ~32 m) it reaches zone k from 20 m beyond the pole
+    assert lamps[k].target_level == 1.0, "the camera's own zone, where the car is heading, is lit at once"
+    assert all(lamps[j].target_level < 1.0 for j in range(k + 2, len(lamps))), "nothing behind the car"
+    # the same car on the other lane (toward +x, going away): nothing toward -x
+    other = build_controller(build_night(scenario), ControllerSpec(name="detector_located", light_blind_ends=False))
+    for t_s in (0.0, 1 / 15):
+        other.place(k, t_s, [vehicle_detection(x_m, -1.6)])
+    assert other.ctx.lamps[k].target_level < 1.0
+
+
+def test_the_first_lamp_whose_approach_no_camera_sees_is_kept_lit_and_only_it():
+    scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
+    controller = build_controller(build_night(scenario), ControllerSpec(name="detector_located"))
+    # every camera looks along +x: the 10 m before the first zone (x 20-30 m) are seen by none, the
+    # 10 m after the last (360-370 m) by the last camera
+    assert controller.blind_end_lamps == [0]
+    controller.on_physics_step(0.0, [])
+    assert [lamp.target_level == 1.0 for lamp in controller.ctx.lamps] == [True] + [False] * 10
+    off = build_controller(build_night(scenario), ControllerSpec(name="detector_located", light_blind_ends=False))
+    off.on_physics_step(0.0, [])
+    assert all(lamp.target_level < 1.0 for lamp in off.ctx.lamps)
