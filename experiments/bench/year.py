@@ -27,8 +27,8 @@ def bench_year(controllers: list[str] | None = None, workers: int = 2, scenario_
     plan = prepare_year(scenario, year_spec(scenario, str(scenario_path)))
     runs, sim_s = table_runs(plan)
     n = len(controllers) if controllers else len(scenario.controllers)
-    print(f"== year, fast mode: {scenario.name} {plan.year.year}, {n} controllers, {runs} hour-runs of "
-          f"{sim_s:,.0f} sim s each controller, {workers} workers ==")
+    print(f"== year, fast mode: {scenario.name} {plan.year.year}, {n} controllers, {runs} hour-runs, "
+          f"{sim_s:,.0f} sim s per controller in all, {workers} workers ==")
     with tempfile.TemporaryDirectory(prefix="bench-year-") as tmp:
         c0, t0 = cpu_s(), time.perf_counter()
         run_year(plan, Path(tmp) / "year", controllers, workers=workers, fidelity="fast", progress=True)
