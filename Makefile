@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: install demo test bench bench-night lint clean
+.PHONY: install demo demo-night test bench bench-night lint clean
 
 install: $(STAMP)
 
@@ -14,10 +14,15 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-# A real scenario through every controller: about 10 simulated minutes of a suburban night.
-# Ends with results/demo/report.html (plots, figures, what they mean); its path is printed last.
+# suburban_night: every controller in fast mode (the shipped sensor model) over the night's first
+# 10 minutes, its first minute again at full fidelity as the check, and the year's figures.
+# Prints each table; ends with the paths of results/demo/night/report.html and .../year/report.html.
 demo: $(STAMP)
-	$(VENV)/bin/citysim run scenarios/suburban_night.yaml --out results/demo --duration 600
+	$(PY) -m experiments.demo
+
+# The same with the whole night (28,800 simulated seconds) in fast mode: long (see README).
+demo-night: $(STAMP)
+	$(PY) -m experiments.demo --night-s 28800
 
 # one worker per core; a test file stays on one worker, so its module fixtures run once
 test: $(STAMP)

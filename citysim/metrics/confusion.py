@@ -142,8 +142,10 @@ class DetectionConfusion:
         truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [self._index(d.cls, "detections.cls") for d in detections]
         det_target = [d.p_target >= self.target_threshold for d in detections]
-        iou = iou_matrix([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections])
-        pairs = greedy_match(iou, self.iou_threshold)
+        pairs: list[tuple[int, int]] = []
+        if truth and detections:  # most judged frames hold neither: nothing to match, no IoU to compute
+            iou = iou_matrix([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections])
+            pairs = greedy_match(iou, self.iou_threshold)
         self.frames += 1
         self.regions += len(detections)
         matched_truth = dict(pairs)

@@ -6,7 +6,10 @@
 with every candidate (``citysim.fast.records``), fits the model and caches it in ``cache_dir``
 under a hash of what it depends on: the placed cameras and poles, the street and its scenery,
 the environment, the dim level, the idle-frame stride, the traffic kinds, the detector's model
-file and the calibration settings. ``sensor_model_for`` loads the cached model or calibrates.
+file and the calibration settings. ``sensor_model_for`` loads the cached model, else the one
+shipped in the repository (``SHIPPED_DIR``, same name and key: calibrating takes ~10 minutes, so
+``make demo`` and a fresh clone use it), else calibrates. A shipped model is data, never refitted;
+``tests/citysim/fast/test_shipped_models.py`` fails as soon as its key no longer matches its scenario.
 """
 
 from __future__ import annotations
@@ -42,6 +45,10 @@ TRAFFIC_FACTOR = 3.0
 def default_cache_dir() -> Path:
     """``.cache/sensor_models`` in the project folder (git ignores it)."""
     return Path(__file__).resolve().parents[2] / ".cache" / "sensor_models"
+
+
+#: Calibrated models committed with the repository, found when the cache has none of that key.
+SHIPPED_DIR = Path(__file__).resolve().parents[2] / "scenarios" / "sensor_models"
 
 
 def calibration_seeds(runs: int) -> list[int]:
@@ -110,13 +117,15 @@ def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: 
 
 def sensor_model_for(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: float = DEFAULT_DURATION_S,
                      runs: int = DEFAULT_RUNS, progress: bool = True, workers: int = 2) -> SensorModel:  # fmt: skip
-    """The scenario's cached sensor model, calibrated now (with a progress bar) if there is none."""
+    """The scenario's cached sensor model, else the shipped one of the same key, calibrated now (with a
+    progress bar) if there is neither."""
     path = model_path(scenario, cache_dir, duration_s, runs)
-    if path.exists():
-        try:
-            return SensorModel.load(path)
-        except (ValueError, KeyError, TypeError):
-            pass  # another version or a damaged file: calibrate again
+    for candidate in (path, SHIPPED_DIR / path.name):
+        if candidate.exists():
+            try:
+                return SensorModel.load(candidate)
+            except (ValueError, KeyError, TypeError):
+                pass  # another version or a damaged file: the next, else calibrate again
     return calibrate(scenario, cache_dir, duration_s=duration_s, runs=runs, progress=progress, workers=workers)[0]
 
 

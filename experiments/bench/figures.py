@@ -12,7 +12,11 @@ measured in the same run on the same frames:
   (as in a comparison), and of the traffic recorder, which runs once for all; peak memory;
 * sweeps: a 16-point sweep on 2 Dask workers vs 1;
 * whole night: every controller of suburban_night through one comparison on 2 workers, the
-  first 10 minutes scaled to the night (``--night``: the whole night, measured; long).
+  first 10 minutes at full fidelity scaled to the night (``--night``: the whole night, measured;
+  long), and fast mode from a sample of each hour of the night;
+* year: ``citysim year`` of suburban_night in fast mode, every controller.
+
+Each whole-night and year figure is printed beside the figure measured before.
 """
 
 from __future__ import annotations
@@ -293,7 +297,20 @@ def bench_night_sample() -> dict:
     return bench_night()
 
 
-SECTIONS = (bench_detector, bench_render, bench_sim, bench_sweep, bench_night_sample)
+def bench_night_fast() -> dict:
+    from experiments.bench.night import bench_night_fast as fast
+
+    return fast()
+
+
+def bench_year_fast() -> dict:
+    from experiments.bench.year import bench_year
+
+    return bench_year()
+
+
+SECTIONS = (bench_detector, bench_render, bench_sim, bench_sweep, bench_night_sample, bench_night_fast,
+            bench_year_fast)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -304,6 +321,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="only the whole-night section, over the whole night (28,800 sim s; long)")  # fmt: skip
     parser.add_argument("--night-s", type=float, default=None, metavar="SECONDS",
                         help="with --night: simulate only the first SECONDS of the night (0 < SECONDS <= 28800)")
+    parser.add_argument("--only", choices=[s.__name__ for s in SECTIONS], action="append",
+                        help="run only this section (repeatable); default: every section")
     args = parser.parse_args(argv)
     if args.night_s is not None and not (args.night and 0 < args.night_s <= WHOLE_NIGHT_S):
         parser.error(f"--night-s: needs --night and a value in (0, {WHOLE_NIGHT_S:.0f}], got {args.night_s}")
@@ -311,6 +330,8 @@ def main(argv: list[str] | None = None) -> int:
         bench_night(args.night_s or WHOLE_NIGHT_S)
         return 0
     for section in SECTIONS:
+        if args.only and section.__name__ not in args.only:
+            continue
         section()
         print()
         sys.stdout.flush()

@@ -1,50 +1,115 @@
-"""Whole-night bench: every controller of suburban_night through one comparison, on 2 workers.
+"""Whole-night bench: every controller of suburban_night, full fidelity and fast mode, on 2 workers.
 
-``bench_night(duration_s)`` times ``citysim.sim.compare.run_comparison`` (the traffic recorded
-once and replayed to every controller, as ``citysim run`` does) over the first ``duration_s``
-simulated seconds of the night and prints the wall time beside the figure measured before the
-traffic was replayed and the other costs cut: a whole night (22:00-06:00, 28,800 s) of every
-controller took about 1.8 hours on 2 cores. A run shorter than the night also prints the
-whole night scaled from it; the night starts with its busiest hour, so that is an upper bound.
+``bench_night(duration_s)`` times ``citysim.sim.compare.run_comparison`` at full fidelity (the
+traffic recorded once and replayed to every controller, as ``citysim run`` does) over the first
+``duration_s`` simulated seconds of the night and prints the wall and CPU time beside the figure
+measured before the traffic was replayed: a whole night (22:00-06:00, 28,800 s) of every
+controller took about 1.8 hours on 2 cores. A run shorter than the night also prints the whole
+night scaled from it; the night starts with its busiest hour, so that is an upper bound.
 
-``python -m experiments.bench --night`` runs the whole night (long); ``make bench`` a sample.
+``bench_night_fast(sample_s)`` times fast mode (``--fidelity fast``, the shipped sensor model)
+over one sample of each hour of the night: hour k of the night is the scenario started at clock
+hour 22 + k with every class's hourly profile from its k-th value on (the scripted test agents in
+the first hour only), ``sample_s`` long from an empty street; each sample is scaled to its hour
+and the hours summed. The street starts empty, so busy hours are a little under-counted. Before:
+every controller took 249 CPU-s per 600 simulated seconds in fast mode.
+
+CPU seconds count this process and every worker process (they are reaped when a comparison
+ends); on a machine shared with other jobs they, not the wall time, are the figure to go by.
+
+``python -m experiments.bench --night`` runs the whole night at full fidelity (long); ``make bench`` samples.
 """
 
 from __future__ import annotations
 
+import resource
 import tempfile
 import time
 from pathlib import Path
 
-from citysim.config.scenario import load_scenario, override
+from citysim.config.scenario import Scenario, load_scenario, override
 from citysim.sim.compare import run_comparison
+from citysim.year.factors import target_classes
 
 REPO = Path(__file__).resolve().parents[2]
+SUBURBAN = REPO / "scenarios" / "suburban_night.yaml"
 WHOLE_NIGHT_S = 28_800.0
 #: every controller of suburban_night, a whole night on 2 cores, before this bench existed
 BEFORE_WHOLE_NIGHT_WALL_S = 1.8 * 3600.0
-#: the run length ``make bench`` samples (the first 10 minutes: the busiest of the night)
+#: fast mode before: every controller, per 600 simulated seconds
+BEFORE_FAST_CPU_S, BEFORE_FAST_SIM_S = 249.0, 600.0
+#: the run length ``make bench`` samples at full fidelity (the first 10 minutes: the busiest of the night)
 SAMPLE_S = 600.0
+#: simulated seconds of each hour fast mode samples
+FAST_SAMPLE_S = 600.0
 
 
-def bench_night(duration_s: float = SAMPLE_S, workers: int = 2,
-                scenario_path: Path = REPO / "scenarios" / "suburban_night.yaml") -> dict:  # fmt: skip
-    """Wall seconds of every controller over ``duration_s`` on ``workers`` processes, and the
-    whole night's wall time (measured, or scaled from the sample)."""
+def cpu_s() -> float:
+    """CPU seconds of this process and of its reaped child processes so far."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def timed_comparison(scenario: Scenario, workers: int, **kwargs) -> tuple[float, float]:
+    """(wall s, CPU s) of one comparison of every controller, its run folder thrown away."""
+    with tempfile.TemporaryDirectory(prefix="bench-night-") as tmp:
+        c0, t0 = cpu_s(), time.perf_counter()
+        run_comparison(scenario, out_dir=Path(tmp) / "run", workers=workers, **kwargs)
+        return time.perf_counter() - t0, cpu_s() - c0
+
+
+def bench_night(duration_s: float = SAMPLE_S, workers: int = 2, scenario_path: Path = SUBURBAN) -> dict:
+    """Wall and CPU seconds of every controller over ``duration_s`` at full fidelity on ``workers``
+    processes, and the whole night's (measured, or scaled from the sample)."""
     if not 0 < duration_s <= WHOLE_NIGHT_S:
         raise ValueError(f"duration_s: must be in (0, {WHOLE_NIGHT_S:.0f}] s, got {duration_s}")
     scenario = override(load_scenario(scenario_path), {"duration_s": float(duration_s)})
     n = len(scenario.controllers)
-    print(f"== whole night: {scenario.name}, {n} controllers, {duration_s:.0f} sim s, {workers} workers ==")
-    with tempfile.TemporaryDirectory(prefix="bench-night-") as tmp:
-        t0 = time.perf_counter()
-        run_comparison(scenario, out_dir=Path(tmp) / "run", workers=workers, progress=True)
-        wall_s = time.perf_counter() - t0
-    night_s = wall_s * WHOLE_NIGHT_S / duration_s
+    print(f"== whole night, full fidelity: {scenario.name}, {n} controllers, {duration_s:.0f} sim s, {workers} workers ==")
+    wall_s, cpu = timed_comparison(scenario, workers, progress=True)
+    scale = WHOLE_NIGHT_S / duration_s
     how = "measured" if duration_s >= WHOLE_NIGHT_S else f"scaled from the first {duration_s:.0f} s, an upper bound"
-    print(f"{n} controllers x {duration_s:.0f} sim s: {wall_s:.0f} s wall ({duration_s * n / wall_s:.1f} sim s per wall s, "
-          f"all controllers together)")
-    print(f"whole night, every controller, {workers} cores: {night_s / 60:.1f} min ({how}); "
-          f"before: {BEFORE_WHOLE_NIGHT_WALL_S / 3600:.1f} h; target <= 15 min")
-    return {"duration_s": duration_s, "wall_s": wall_s, "whole_night_wall_s": night_s,
-            "before_whole_night_wall_s": BEFORE_WHOLE_NIGHT_WALL_S}  # fmt: skip
+    print(f"{n} controllers x {duration_s:.0f} sim s: {wall_s:.0f} s wall, {cpu:.0f} CPU-s "
+          f"({duration_s * n / wall_s:.1f} sim s per wall s, all controllers together)")
+    print(f"whole night, every controller, {workers} cores: {wall_s * scale / 60:.1f} min wall, "
+          f"{cpu * scale / 3600:.2f} CPU-h ({how}); before: {BEFORE_WHOLE_NIGHT_WALL_S / 3600:.1f} h wall; "
+          f"target <= 15 min")
+    return {"duration_s": duration_s, "wall_s": wall_s, "cpu_s": cpu, "whole_night_wall_s": wall_s * scale,
+            "whole_night_cpu_s": cpu * scale, "before_whole_night_wall_s": BEFORE_WHOLE_NIGHT_WALL_S}  # fmt: skip
+
+
+def night_hour(scenario: Scenario, hour: int, sample_s: float) -> Scenario:
+    """Hour ``hour`` of the scenario's night as a run of its own, ``sample_s`` long (see the module doc)."""
+    updates: dict = {"duration_s": float(sample_s), "start_hour": (scenario.start_hour + hour) % 24}
+    if hour:
+        updates["traffic.scripted"] = []
+        for name, spec in target_classes(scenario).items():
+            profile = list(spec.hourly_profile)
+            if profile:
+                updates[f"traffic.classes.{name}.hourly_profile"] = profile[min(hour, len(profile) - 1):]
+    return override(scenario, updates)
+
+
+def bench_night_fast(sample_s: float = FAST_SAMPLE_S, workers: int = 2, scenario_path: Path = SUBURBAN) -> dict:
+    """Fast mode, every controller, one ``sample_s`` sample per hour of the night, scaled to the night."""
+    if not 0 < sample_s <= 3600:
+        raise ValueError(f"sample_s: must be in (0, 3600] s, got {sample_s}")
+    base = load_scenario(scenario_path)
+    hours = int(WHOLE_NIGHT_S // 3600)
+    n = len(base.controllers)
+    print(f"== whole night, fast mode: {base.name}, {n} controllers, a {sample_s:.0f} s sample of each of its "
+          f"{hours} hours, {workers} workers ==")
+    wall = cpu = 0.0
+    per_hour = []
+    for hour in range(hours):
+        w, c = timed_comparison(night_hour(base, hour, sample_s), workers, fidelity="fast", progress=False)
+        scale = 3600.0 / sample_s
+        per_hour.append({"hour": hour, "wall_s": w * scale, "cpu_s": c * scale})
+        wall, cpu = wall + w * scale, cpu + c * scale
+        print(f"  hour {hour} ({(base.start_hour + hour) % 24:02.0f}:00): {w:.0f} s wall, {c:.0f} CPU-s "
+              f"per {sample_s:.0f} sim s -> {c * scale:.0f} CPU-s per hour", flush=True)
+    before = BEFORE_FAST_CPU_S * WHOLE_NIGHT_S / BEFORE_FAST_SIM_S
+    print(f"whole night, every controller, fast mode, {workers} cores: {wall / 60:.1f} min wall, {cpu:.0f} CPU-s "
+          f"(scaled from the hourly samples); before: {BEFORE_FAST_CPU_S:.0f} CPU-s per {BEFORE_FAST_SIM_S:.0f} "
+          f"sim s, {before:,.0f} CPU-s scaled to the night; target <= 30 s")
+    return {"sample_s": sample_s, "hours": per_hour, "whole_night_wall_s": wall, "whole_night_cpu_s": cpu}

@@ -1,0 +1,99 @@
+"""`make demo`: suburban_night in fast mode, a full-fidelity check of its start, and its year.
+
+Three ``citysim`` commands, each printing its own table:
+
+1. ``citysim run --fidelity fast``: every controller of the scenario, from 22:00 for ``--night-s``
+   simulated seconds (``make demo``: the first ``DEMO_NIGHT_S``, the busiest of the night;
+   ``make demo-night``: the whole night, 28,800 s), cameras judged by the sensor model shipped in
+   ``scenarios/sensor_models/`` (no calibration on a fresh clone); writes DIR/night/report.html;
+2. ``citysim validate``: the first ``--check-s`` seconds of the same night (the scenario's seed)
+   again at full fidelity, rendered and detected, beside fast mode, for ``CHECK_CONTROLLERS``
+   (always_on and the oracle come with them), each figure PASS or MISS against its tolerance;
+3. ``citysim year``: the year at the scenario's site for ``YEAR_CONTROLLERS`` from a response
+   table of ``--year-sample-s`` samples; writes DIR/year/report.html.
+
+Each step's wall and CPU seconds are printed after it; the report paths come last. Bad values
+stop before any work with one line naming the option and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from citysim.cli import main as citysim
+from experiments.bench.night import WHOLE_NIGHT_S, cpu_s
+
+REPO = Path(__file__).resolve().parents[1]
+SCENARIO = REPO / "scenarios" / "suburban_night.yaml"
+#: what ``make demo`` simulates of the night in fast mode (see README: a whole night does not fit 3 minutes)
+DEMO_NIGHT_S = 600.0
+CHECK_S = 60.0
+CHECK_CONTROLLERS = "pir,detector_confirmed,detector_located"
+YEAR_CONTROLLERS = "always_on,oracle,pir,schedule"
+YEAR_SAMPLE_S = 300.0
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m experiments.demo", description=__doc__.split("\n")[0])
+    p.add_argument("--out", type=Path, default=REPO / "results" / "demo",
+                   help="folder for night/ and year/ (each replaced if it is an earlier demo's)")
+    p.add_argument("--night-s", type=float, default=DEMO_NIGHT_S,
+                   help=f"simulated seconds of the night in fast mode, from 22:00 (0 < s <= {WHOLE_NIGHT_S:.0f})")
+    p.add_argument("--check-s", type=float, default=CHECK_S,
+                   help="simulated seconds of the full-fidelity check (0 < s <= --night-s)")
+    p.add_argument("--year-sample-s", type=float, default=YEAR_SAMPLE_S,
+                   help="simulated seconds per traffic level of the year's table (30 <= s <= 14400)")
+    return p
+
+
+def check_args(p: argparse.ArgumentParser, args) -> None:
+    """One line naming the bad option and its valid range, exit 2, before any simulation."""
+    if not 0 < args.night_s <= WHOLE_NIGHT_S:
+        p.error(f"--night-s: must be in (0, {WHOLE_NIGHT_S:.0f}] simulated s, got {args.night_s:g}")
+    if not 0 < args.check_s <= args.night_s:
+        p.error(f"--check-s: must be in (0, --night-s = {args.night_s:g}] simulated s, got {args.check_s:g}")
+    if not 30 <= args.year_sample_s <= 14400:
+        p.error(f"--year-sample-s: must be in [30, 14400] simulated s, got {args.year_sample_s:g}")
+
+
+def _step(title: str, argv: list[str], timings: list) -> None:
+    print(f"\n=== {title} ===", flush=True)
+    c0, t0 = cpu_s(), time.perf_counter()
+    code = citysim(argv)
+    wall, cpu = time.perf_counter() - t0, cpu_s() - c0
+    timings.append((title, wall, cpu))
+    print(f"({title}: {wall:.0f} s wall, {cpu:.0f} CPU-s)", flush=True)
+    if code:
+        raise SystemExit(code)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = _parser()
+    args = p.parse_args(argv)
+    check_args(p, args)
+    out, scenario = args.out, str(SCENARIO)
+    night_h = args.night_s / 3600.0
+    timings: list = []
+    _step(f"1. the night in fast mode: every controller, {args.night_s:g} s from 22:00 ({night_h:.2g} h)",
+          ["run", scenario, "--out", str(out / "night"), "--fidelity", "fast", "--duration", f"{args.night_s:g}"],
+          timings)  # fmt: skip
+    _step(f"2. the check: its first {args.check_s:g} s at full fidelity (rendered and detected) beside fast mode",
+          ["validate", scenario, "--seeds", "1", "--duration", f"{args.check_s:g}", "--controllers",
+           CHECK_CONTROLLERS], timings)  # fmt: skip
+    _step(f"3. the year: {YEAR_CONTROLLERS}, {args.year_sample_s:g} s samples per traffic level",
+          ["year", scenario, "--out", str(out / "year"), "--controllers", YEAR_CONTROLLERS,
+           "--sample-s", f"{args.year_sample_s:g}"], timings)  # fmt: skip
+    print("\n=== demo done ===")
+    for title, wall, cpu in timings:
+        print(f"  {wall:5.0f} s wall {cpu:6.0f} CPU-s  {title.split(':')[0]}")
+    total_wall, total_cpu = sum(t[1] for t in timings), sum(t[2] for t in timings)
+    print(f"  {total_wall:5.0f} s wall {total_cpu:6.0f} CPU-s  in all")
+    print(f"open in a browser:\n  the night  {out / 'night' / 'report.html'}\n  the year   {out / 'year' / 'report.html'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

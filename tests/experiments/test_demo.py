@@ -1,0 +1,31 @@
+"""make demo's options: bad values stop it before any simulation, naming the option, exit code 2."""
+
+import pytest
+
+from experiments import demo
+
+
+@pytest.mark.parametrize(("argv", "option"), [
+    (["--night-s", "0"], "--night-s"), (["--night-s", "28801"], "--night-s"),
+    (["--check-s", "700"], "--check-s"), (["--night-s", "120", "--check-s", "121"], "--check-s"),
+    (["--year-sample-s", "10"], "--year-sample-s"),
+])  # fmt: skip
+def test_bad_demo_options_exit_2_before_any_simulation(argv, option, capsys, monkeypatch):
+    monkeypatch.setattr(demo, "citysim", lambda *a: pytest.fail("simulated although an option was bad"))
+    with pytest.raises(SystemExit) as stop:
+        demo.main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert option in err and "must be in" in err
+
+
+def test_the_demo_runs_the_three_commands_in_order_and_says_where_the_reports_are(tmp_path, capsys, monkeypatch):
+    calls = []
+    monkeypatch.setattr(demo, "citysim", lambda argv: calls.append(argv) or 0)
+    assert demo.main(["--out", str(tmp_path), "--night-s", "28800"]) == 0
+    assert [c[0] for c in calls] == ["run", "validate", "year"]
+    assert calls[0][calls[0].index("--fidelity") + 1] == "fast"
+    assert calls[0][calls[0].index("--duration") + 1] == "28800"
+    assert calls[1][calls[1].index("--duration") + 1] == f"{demo.CHECK_S:g}"
+    out = capsys.readouterr().out
+    assert str(tmp_path / "night" / "report.html") in out and str(tmp_path / "year" / "report.html") in out
