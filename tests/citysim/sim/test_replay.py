@@ -89,7 +89,7 @@ def test_a_comparison_replaying_traffic_writes_the_run_folder_of_one_world_per_c
     # a quarter of the pixels: the test is about the traffic the controllers see, not the image
     data["lamps"]["camera"] = {**data["lamps"]["camera"], "width_px": 160, "height_px": 120}
     scenario = scenario_from_mapping({**data, "physics_hz": 60.0})
-    names = ["pir", "detector_confirmed"]
+    names = ["detector_confirmed"]  # always_on and the oracle join it: three controllers, three processes
     run_comparison(scenario, names, out_dir=tmp_path / "worlds", replay_traffic=False)
     run_comparison(scenario, names, out_dir=tmp_path / "replayed", workers=2)
     summary_worlds, lamps_worlds, objects_worlds = read_run(tmp_path / "worlds")
