@@ -30,7 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from detector.classes import TABLE1
-from detector.tracks.track import SWAY_FRAMES, Track
+from detector.tracks.track import SWAY_FRAMES, Track, median
 
 
 def apparent_size_ranges_m() -> dict[str, tuple[tuple[float, float], tuple[float, float]]]:
@@ -104,7 +104,7 @@ def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     if sum(track.accel_violations) >= limits.max_accel_violations:
         return "erratic"
     heights = track.heights_m
-    if table1_misfit(_median(track.widths_m), _median(heights)) > limits.size_tolerance:
+    if table1_misfit(median(track.widths_m), median(heights)) > limits.size_tolerance:
         return "size outside Table 1"
     n = len(heights)
     if n >= limits.min_frames:
@@ -115,13 +115,6 @@ def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     if _sways(track, limits):
         return "oscillating in place"
     return None
-
-
-def _median(values) -> float:
-    """The median, as ``statistics.median`` (which costs more than the rest of a track's frame)."""
-    ordered = sorted(values)
-    n = len(ordered)
-    return ordered[n // 2] if n % 2 else (ordered[n // 2 - 1] + ordered[n // 2]) / 2
 
 
 def _sways(track: Track, limits: PlausibilityLimits) -> bool:

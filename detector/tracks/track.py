@@ -64,7 +64,8 @@ def pool_probabilities(frames: deque | list, pooling: str = "mean_log") -> list[
     return [e / total for e in exp]
 
 
-def _median(values: list[float]) -> float:
+def median(values) -> float:
+    """The median, as ``statistics.median`` (which costs more than the rest of a track's frame)."""
     ordered = sorted(values)
     n = len(ordered)
     return ordered[n // 2] if n % 2 else (ordered[n // 2 - 1] + ordered[n // 2]) / 2
@@ -82,13 +83,13 @@ def _median_halves_velocity(positions, fps: float, min_span_frames: float) -> tu
     """
     n = len(positions)
     older, newer = list(positions)[: n // 2], list(positions)[n - n // 2:]
-    span_frames = _median([p[0] for p in newer]) - _median([p[0] for p in older])
+    span_frames = median([p[0] for p in newer]) - median([p[0] for p in older])
     if span_frames < min_span_frames:
         return None
     dt_s = span_frames / fps
     return (
-        (_median([p[1] for p in newer]) - _median([p[1] for p in older])) / dt_s,
-        (_median([p[2] for p in newer]) - _median([p[2] for p in older])) / dt_s,
+        (median([p[1] for p in newer]) - median([p[1] for p in older])) / dt_s,
+        (median([p[2] for p in newer]) - median([p[2] for p in older])) / dt_s,
     )
 
 
@@ -251,7 +252,7 @@ class Track:
     def _note_size_px(self, w: float, h: float) -> None:
         self.widths_px.append(w)
         self.heights_px.append(h)
-        self.typical_size_px = (_median(self.widths_px), _median(self.heights_px))
+        self.typical_size_px = (median(self.widths_px), median(self.heights_px))
 
     def _update_velocity(self, frame: int) -> None:
         positions = self.positions
