@@ -223,6 +223,10 @@ def _add_fidelity(parser, default: str) -> None:
                         help=f"full: render every judged camera frame for the real detector; fast: a sensor model "
                              f"calibrated on full-fidelity frames of this scenario's cameras (calibrated on first use; "
                              f"see citysim calibrate). Default: {default}")  # fmt: skip
+    _add_cache(parser)
+
+
+def _add_cache(parser) -> None:
     parser.add_argument("--cache", type=Path, default=None,
                         help="folder of calibrated sensor models (default: .cache/sensor_models in the project)")
 
@@ -234,8 +238,7 @@ def _add_calibrate_validate(sub) -> None:
                                    "cache it by a hash of the cameras, street, environment, traffic kinds and "
                                    "detector model.")
     c.add_argument("scenario", type=Path, help="scenario YAML file")
-    c.add_argument("--cache", type=Path, default=None,
-                   help="folder of calibrated sensor models (default: .cache/sensor_models in the project)")
+    _add_cache(c)
     c.add_argument("--duration", type=number(float, gt=0, le=MAX_DURATION_S, unit="s"), default=120.0,
                    help="simulated seconds per calibration night")
     c.add_argument("--runs", type=number(int, ge=1), default=2, help="calibration nights (seeds)")
@@ -254,8 +257,7 @@ def _add_calibrate_validate(sub) -> None:
     v.add_argument("--seeds", type=number(int, ge=1), default=2, help="validation seeds")
     v.add_argument("--controllers", help="comma-separated controller names (default: the scenario's list)")
     v.add_argument("--workers", type=number(int, ge=1), default=2, help="parallel processes for the full runs")
-    v.add_argument("--cache", type=Path, default=None,
-                   help="folder of calibrated sensor models (default: .cache/sensor_models in the project)")
+    _add_cache(v)
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
     v.set_defaults(func=cmd_validate)
 
