@@ -81,8 +81,9 @@ def _median_halves_velocity(positions, fps: float, min_span_frames: float) -> tu
     than half its frames, and a steady motion gives the same velocity as the end points.
     None while the halves' middle frames are under ``min_span_frames`` apart.
     """
-    n = len(positions)
-    older, newer = list(positions)[: n // 2], list(positions)[n - n // 2:]
+    items = list(positions)
+    n = len(items)
+    older, newer = items[: n // 2], items[n - n // 2:]
     span_frames = median([p[0] for p in newer]) - median([p[0] for p in older])
     if span_frames < min_span_frames:
         return None
