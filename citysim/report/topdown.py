@@ -194,13 +194,21 @@ def _draw_scenery(ax: Axes, street: Street) -> None:
 
 
 def _draw_coverage(ax: Axes, grid: CoverageGrid, y_hi: float) -> None:
-    """Seen cells green, unseen cells red; blind stretches of the street as red bars on the top edge."""
-    half = grid.step_m / 2
-    for seen, colour in ((True, "#2e7d32"), (False, "#c62828")):
-        ix, iy = np.nonzero(grid.seen == seen)
-        for x, y in zip(grid.xs_m[ix], grid.ys_m[iy], strict=True):
-            ax.add_patch(Rectangle((x - half, y - half), grid.step_m, grid.step_m, color=colour,
-                                   alpha=0.30, lw=0, zorder=4))  # fmt: skip
+    """Seen cells green, unseen cells red; blind stretches of the street as red bars on the top edge.
+
+    The cells are one image on a regular grid (cells off the lanes and sidewalks transparent):
+    a patch per cell cost some 30 s of drawing for an 11-lamp street."""
+    step = grid.step_m
+    y0 = float(grid.ys_m.min()) - step / 2
+    n_rows = int(round((float(grid.ys_m.max()) + step / 2 - y0) / step))
+    rows = np.clip(np.round((grid.ys_m - y0) / step - 0.5).astype(int), 0, n_rows - 1)
+    green, red = np.array((0.18, 0.49, 0.20)), np.array((0.78, 0.16, 0.16))
+    rgba = np.zeros((n_rows, len(grid.xs_m), 4))
+    rgba[rows, :, :3] = np.where(grid.seen.T[:, :, None], green, red)  # image rows are y
+    rgba[rows, :, 3] = 0.30
+    x0 = float(grid.xs_m[0]) - step / 2
+    extent = (x0, x0 + step * len(grid.xs_m), y0, y0 + step * n_rows)
+    ax.imshow(rgba, origin="lower", extent=extent, interpolation="nearest", aspect="auto", zorder=4)
     for a_m, b_m in blind_stretches_m(grid):
         ax.plot([a_m, b_m], [y_hi - 1.0, y_hi - 1.0], lw=5, color="#c62828", solid_capstyle="butt", zorder=9)
 
