@@ -154,6 +154,12 @@ def _lane_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator
     return traits, Route((leg,), f"lane{i}")
 
 
+#: Half-width of a wandering animal's band, m: room to get round the longest road user stopped
+#: across its path, either way (with +-1.5 m, an animal and a car that stopped for it each waited
+#: for the other for good: a dead-lock found at ten times suburban_night's traffic).
+WANDER_HALF_BAND_M = max(k.sizes.length_m[1] for k in AGENT_KINDS.values() if k.road_user) + 1.0
+
+
 def _verge_wander_route(street: Street, spec: TrafficClassSpec, rng: np.random.Generator, night: bool):
     traits = draw_agent(spec.kind, rng, spec.draw_options(night=night))
     edges = [(s.y_center_m - s.width_m / 2, s.y_center_m + s.width_m / 2) for s in street.sidewalks]
@@ -173,7 +179,7 @@ def _verge_wander_route(street: Street, spec: TrafficClassSpec, rng: np.random.G
         (float(np.clip(x + rng.uniform(-5.0, 5.0), 2.0, street.length_m - 2.0)), verge[end_side])
     )
     legs = tuple(
-        Leg(a, b, (-1.5, 1.5), (-0.1, 0.1), 0.0)  # wide band: room to get round a stopped car
+        Leg(a, b, (-WANDER_HALF_BAND_M, WANDER_HALF_BAND_M), (-0.1, 0.1), 0.0)
         for a, b in zip(points[:-1], points[1:], strict=True)
         if a != b
     )

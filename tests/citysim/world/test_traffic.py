@@ -202,3 +202,17 @@ def test_routes_stay_on_their_paths(scenario, street):
                 assert leg.pref_m < -0.5  # near the right edge of the lane
             else:
                 assert leg.pref_m == 0.0
+
+
+def test_a_wandering_animal_can_get_round_the_longest_road_user(scenario, street):
+    # An animal crossing meets a car that stopped for it with its body across the animal's line;
+    # unless the animal may step aside past the car's whole length, each waits for the other
+    # for good (found at ten times suburban_night's traffic with a band of +-1.5 m).
+    rng = np.random.default_rng(3)
+    spec = scenario.traffic.classes.animal
+    longest_m = max(AGENT_KINDS[k].sizes.length_m[1] for k in AGENT_KINDS if AGENT_KINDS[k].road_user)
+    for _ in range(50):
+        traits, route = draw_arrival(street, spec, rng)
+        for leg in route.legs:
+            lo_m, hi_m = leg.band_m
+            assert min(-lo_m, hi_m) >= longest_m + traits.width_m / 2, (leg.band_m, longest_m)
