@@ -7,7 +7,7 @@ Writes DIR/detections.csv (one row per classified region, noise included; boxes 
 video's own pixels; each with its track: id, class, pooled P(target), ground position and
 speed), DIR/tracks.csv (one row per track: first and last frame, class, frames seen, mean
 speed, why it was not a target), DIR/annotated.mp4 (the video at its own size with the boxes,
-track ids and classes drawn) and DIR/summary.json (counts, and the size the frames were
+track ids and classes drawn; not with --no-video) and DIR/summary.json (counts, and the size the frames were
 processed at). User errors print one
 line naming the argument, file or field and exit with code 2; nothing half-written is left
 behind, and an --out that cannot or should not be written is refused before any frame.
@@ -53,11 +53,15 @@ _GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
 
 
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
-                 max_width_px: int = 424, max_distance_m: float = 25.0, progress: bool = True) -> dict:
+                 max_width_px: int = 424, max_distance_m: float = 25.0, progress: bool = True,
+                 annotated: bool = True) -> dict:
     """Run the detector over a video and write ``out_dir``; returns the summary (also in summary.json).
 
     Frames wider than ``max_width_px`` are processed scaled down; every box written or drawn
-    is in the video's own pixels (``summary["processing"]`` states the scale).
+    is in the video's own pixels (``summary["processing"]`` states the scale). ``annotated``
+    False writes no annotated.mp4: what a lamp's own small computer would do, and a third
+    less time on the development clips (encoding the video at its own size costs more than
+    detecting in it).
     """
     from detector.detector import Detector
 
@@ -75,9 +79,10 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
     detector.tracks.keep_ended = True  # for tracks.csv
     summary = {"video": str(video), "camera": str(camera_file), "model": model_name,
                "boxes": "x, y, w, h in the video's own pixels (OpenCV boundingRect: columns x .. x+w-1)",
-               "processing": scale.as_dict(), "max_distance_m": max_distance_m, "fps": info.fps}
+               "processing": scale.as_dict(), "max_distance_m": max_distance_m, "fps": info.fps,
+               "annotated_video": "annotated.mp4" if annotated else None}
     with staged_output(out_dir) as stage:
-        counts = _detect_frames(detector, info, scale, stage, progress)
+        counts = _detect_frames(detector, info, scale, stage, progress, annotated)
         counts["tracks"] = write_tracks_csv(detector.tracks, stage / "tracks.csv")
         summary.update(counts)
         (stage / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
@@ -105,15 +110,19 @@ def _choose_model(cam: CameraModel, camera_file: Path, model_path: Path | None):
     return train_camera_model(cam), f"trained for {camera_file} (seed 0)"
 
 
-def _detect_frames(detector, info, scale: FrameScale, stage: Path, progress: bool) -> dict:
-    """Detect in every frame: detections.csv and annotated.mp4 (at the video's size) into ``stage``."""
+def _detect_frames(detector, info, scale: FrameScale, stage: Path, progress: bool, annotated: bool) -> dict:
+    """Detect in every frame: detections.csv and (``annotated``) annotated.mp4 at the video's size
+    into ``stage``."""
     from detector.draw import draw_detections
 
     counts: dict[str, int] = {}
     frames_with_target = n_frames = 0
-    writer = cv2.VideoWriter(str(stage / "annotated.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), info.fps, scale.source_px)
-    if not writer.isOpened():
-        raise VideoError(f"{stage.parent}: OpenCV cannot write an mp4 video here")
+    writer = None
+    if annotated:
+        writer = cv2.VideoWriter(str(stage / "annotated.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), info.fps,
+                                 scale.source_px)
+        if not writer.isOpened():
+            raise VideoError(f"{stage.parent}: OpenCV cannot write an mp4 video here")
     try:
         with open(stage / "detections.csv", "w", newline="") as fh:
             rows = csv.writer(fh)
@@ -131,9 +140,11 @@ def _detect_frames(detector, info, scale: FrameScale, stage: Path, progress: boo
                                    _fixed(det.ground_y_m, 3), _fixed(det.speed_mps, 3)])
                     counts[det.cls] = counts.get(det.cls, 0) + 1
                 frames_with_target += detector.is_target(detections)
-                writer.write(draw_detections(source, detections, boxes_px=boxes))
+                if writer is not None:
+                    writer.write(draw_detections(source, detections, boxes_px=boxes))
     finally:
-        writer.release()
+        if writer is not None:
+            writer.release()
     return {"frames": n_frames, "frames_with_target": frames_with_target, "regions_per_class": counts}
 
 
@@ -237,6 +248,8 @@ def _detect_parser() -> argparse.ArgumentParser:
                         "video's own pixels)")
     p.add_argument("--max-distance-m", type=number(float, gt=0, unit="m"), default=25.0,
                    help="ignore objects farther than this, m")
+    p.add_argument("--no-video", action="store_true",
+                   help="write no annotated.mp4 (only the CSVs and summary.json, as a lamp's own computer would)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p
 
@@ -260,7 +273,7 @@ def main(argv: list[str] | None = None) -> int:
         args = _detect_parser().parse_args(argv)
         check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
         summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
-                               args.max_distance_m, progress=not args.no_progress)
+                               args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video)
     except USER_ERRORS as exc:
         print(f"error: {exc}", file=sys.stderr)
         return USAGE_EXIT
@@ -271,7 +284,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{summary['frames']} frames {scaled}; target in {summary['frames_with_target']} frames; "
           f"regions per class {summary['regions_per_class']}")
     print(f"tracks per class {summary['tracks']}")
-    print(f"results written to {args.out}/: detections.csv, tracks.csv, annotated.mp4, summary.json")
+    video = "" if args.no_video else " annotated.mp4,"
+    print(f"results written to {args.out}/: detections.csv, tracks.csv,{video} summary.json")
     return 0
 
 

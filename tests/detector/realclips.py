@@ -25,7 +25,8 @@ def detections(tmp_path: Path, clip: str, camera: str) -> tuple[list[dict], dict
     video = CLIPS / clip
     if not video.exists():
         pytest.skip(f"{video} is missing: set CITYSIM_REALCLIPS to the folder holding the real clips")
-    summary = detect_video(video, CAMERAS / camera, tmp_path / "out", progress=False)
+    # no annotated video: encoding it at the clip's own size took a third of the test's time
+    summary = detect_video(video, CAMERAS / camera, tmp_path / "out", progress=False, annotated=False)
     with open(tmp_path / "out" / "detections.csv", newline="") as fh:
         return list(csv.DictReader(fh)), summary
 

@@ -96,6 +96,18 @@ def test_cli_detects_a_walker_at_its_distance_as_a_pedestrian(scene_b_files):
     assert all(t["reject_reason"] for t in tracks if t["cls"] == "noise")
 
 
+
+def test_no_video_writes_the_same_results_without_the_annotated_video(scene_b_files, capsys):
+    with_video, without = scene_b_files / "with", scene_b_files / "without"
+    common = ["--camera", str(scene_b_files / "cam.yaml"), "--no-progress"]
+    assert main([str(scene_b_files / "walker.mp4"), *common, "--out", str(with_video)]) == 0
+    assert main([str(scene_b_files / "walker.mp4"), *common, "--out", str(without), "--no-video"]) == 0
+    assert "annotated.mp4" not in capsys.readouterr().out.splitlines()[-1]
+    assert (with_video / "annotated.mp4").exists() and not (without / "annotated.mp4").exists()
+    for name in ("detections.csv", "tracks.csv"):
+        assert (without / name).read_text() == (with_video / name).read_text()
+    assert json.loads((without / "summary.json").read_text())["annotated_video"] is None
+
 def run_cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "detector", *args], capture_output=True, text=True)
 
