@@ -16,6 +16,11 @@ whether the detector found each), it holds:
 * false alarms (insects, rain, branches): per judged frame with none running, the probability
   one starts (``fa_start_p``, by the camera's own lamp lit or dim), how many judged frames it
   lasts, and where it is reported (distance, box, class), as samples.
+* ``track``: the same hit, persistence, class and false-alarm tables fitted on the detector's
+  track decisions (a detection is a target when its track is: ``detector_tracked`` and
+  ``detector_located``) rather than each frame's own (``detector``, ``detector_confirmed``);
+  ``for_tracks()`` gives the model those controllers draw from. Insects seldom make a plausible
+  target track, so the two false-alarm rates differ several-fold.
 * ``p_regions_idle``: P(a frame with no candidate holds some moving region) (keeps the camera
   judged every frame, as in full fidelity).
 * the threshold baselines' trigger: samples of the largest foreground region's share of the
@@ -52,7 +57,13 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 3
+MODEL_VERSION = 4
+#: The record columns (``citysim.fast.records``) the track-level fit reads in place of the frame-level ones.
+TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "fa": "track_fa",
+                 "fa_distance_m": "track_fa_distance_m", "fa_box": "track_fa_box", "fa_class": "track_fa_class"}
+#: The fields ``SensorModel.track`` holds: those fitted again on the track decisions.
+TRACK_FIELDS = ("p_hit", "persistence", "class_given_hit", "fa_start_p", "fa_length_frames", "fa_reports",
+                "fa_per_camera_hour")
 
 
 def bin_of(values: np.ndarray, edges: tuple[float, ...]) -> np.ndarray:
@@ -107,9 +118,17 @@ class SensorModel:
     frames: int = 0  # judged camera frames it was fitted on
     candidate_frames: int = 0
     fa_per_camera_hour: float = 0.0  # false alarms started per camera-hour of calibration
+    track: dict | None = None  # TRACK_FIELDS fitted on the track decisions (None: not recorded)
 
     def p_hit_array(self) -> np.ndarray:
         return np.asarray(self.p_hit, dtype=np.float64)
+
+    def for_tracks(self) -> SensorModel:
+        """The model of a controller deciding per track: this one with the track-level tables."""
+        if self.track is None:
+            raise ValueError(f"sensor model {self.key}: fitted without track decisions; recalibrate "
+                             "(citysim calibrate)")
+        return SensorModel(**{**asdict(self), **self.track, "track": None})
 
     def save(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -232,10 +251,23 @@ def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray],
         raise ValueError("calibration: no judged camera frames to fit a sensor model on")
     cells = cell_of(rows["kind"], rows["forward_m"], rows["bearing_rad"], rows["light"], rows["young"],
                     rows["speed_mps"])  # fmt: skip
+    decisions = _fit_decisions(cells, rows, frames, camera_hours)
+    track = None
+    if "track_hit" in rows:  # the same fit on the track decisions' columns
+        track_rows = {**rows, **{c: rows[t] for c, t in TRACK_COLUMNS.items() if t in rows}}
+        track_frames = {**frames, **{c: frames[t] for c, t in TRACK_COLUMNS.items() if t in frames}}
+        fitted = _fit_decisions(cells, track_rows, track_frames, camera_hours)
+        track = {name: fitted[name] for name in TRACK_FIELDS}
+    return SensorModel(
+        key=key, **decisions, area_fraction=fit_area_fractions(frames), frames=int(len(frames["camera"])),
+        candidate_frames=int(len(rows["hit"])), track=track,
+    )  # fmt: skip
+
+
+def _fit_decisions(cells: tuple, rows: dict[str, np.ndarray], frames: dict[str, np.ndarray],
+                   camera_hours: float) -> dict:  # fmt: skip
+    """The hit, persistence, class and false-alarm fields fitted on ``rows``' hits and ``frames``' fa."""
     table = fit_p_hit(cells, rows["hit"])
     p = table[cells] if len(rows["hit"]) else np.zeros(0)
-    return SensorModel(
-        key=key, p_hit=table.tolist(), persistence=fit_persistence(rows, p), class_given_hit=fit_classes(rows),
-        area_fraction=fit_area_fractions(frames), frames=int(len(frames["camera"])),
-        candidate_frames=int(len(rows["hit"])), **fit_false_alarms(frames, camera_hours),
-    )  # fmt: skip
+    return {"p_hit": table.tolist(), "persistence": fit_persistence(rows, p), "class_given_hit": fit_classes(rows),
+            **fit_false_alarms(frames, camera_hours)}  # fmt: skip

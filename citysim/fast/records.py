@@ -31,9 +31,10 @@ IOU_MATCH = 0.3
 NEAR_M = 3.0
 LIT_REACH_M = 20.0
 ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
-               "hit", "det_class")  # fmt: skip
+               "hit", "det_class", "track_hit", "track_det_class")  # fmt: skip
 FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
-                 "regions", "near_kind", "near_forward_m", "area_fraction", "age_bin")  # fmt: skip
+                 "regions", "near_kind", "near_forward_m", "area_fraction", "age_bin",
+                 "track_fa", "track_fa_distance_m", "track_fa_box", "track_fa_class")  # fmt: skip
 
 
 def is_young(learning_rate: float | None) -> bool:
@@ -125,29 +126,31 @@ class CalibrationRecorder(Collector):
             return  # not judged (the light in view was changing)
         recorded = self.sensors.detectors_made[lamp_index]
         frame = int(round(t_s * self.fps))
-        hits, fa = self._match(truth, detections)
         cand, light = self._candidates()
         idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
+        # the frame's own decision (detector, detector_confirmed) and its track's (detector_tracked,
+        # detector_located): fast mode draws each controller's kind from its own fit
+        hits, fa = self._match(truth, [d for d in detections if d.p_target >= self.target_threshold])
         fa = self._near_candidates(lamp_index, idx, hits, fa)
+        track_hits, track_fa = self._match(truth, [d for d in detections if _track_target(d, self.target_threshold)])
+        track_fa = self._near_candidates(lamp_index, idx, track_hits, track_fa)
         young = is_young(recorded.last_rate)
         for a_i in idx.tolist():
             agent = self.agents[a_i]
             det_class = hits.get(agent.object_id, -1)
+            track_class = track_hits.get(agent.object_id, -1)
             for col, value in zip(ROW_COLUMNS, (lamp_index, frame, agent.object_id, KINDS.index(agent.cls),
                                                 cand.forward_m[a_i, lamp_index], cand.bearing_rad[a_i, lamp_index],
-                                                agent.speed_mps, light[a_i], young, det_class >= 0, det_class),
+                                                agent.speed_mps, light[a_i], young, det_class >= 0, det_class,
+                                                track_class >= 0, track_class),
                                   strict=True):  # fmt: skip
                 self.rows[col].append(value)
         near = idx[np.argmin(cand.forward_m[idx, lamp_index])] if len(idx) else -1
-        fa_row = fa[0] if fa else None
-        values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, fa_row is not None,
-                  float(fa_row.features[3]) if fa_row is not None else np.nan,
-                  tuple(fa_row.box_px) if fa_row is not None else (0, 0, 0, 0),
-                  DETECTOR_CLASSES.index(fa_row.cls) if fa_row is not None else -1,
+        values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, *_fa_values(fa),
                   len(recorded.inner.last_regions) > 0,
                   KINDS.index(self.agents[near].cls) if near >= 0 else -1,
                   float(cand.forward_m[near, lamp_index]) if near >= 0 else np.nan, recorded.last_area_fraction,
-                  background_age_bin(recorded.last_rate))  # fmt: skip
+                  background_age_bin(recorded.last_rate), *_fa_values(track_fa))  # fmt: skip
         for col, value in zip(FRAME_COLUMNS, values, strict=True):
             self.frames[col].append(value)
 
@@ -175,9 +178,8 @@ class CalibrationRecorder(Collector):
                 hits[owner.object_id] = DETECTOR_CLASSES.index(d.cls)
         return left
 
-    def _match(self, truth: Sequence, detections: Sequence) -> tuple[dict[int, int], list]:
+    def _match(self, truth: Sequence, targets: Sequence) -> tuple[dict[int, int], list]:
         """Truth object id -> detected class index of its target detection; unmatched target detections."""
-        targets = [d for d in detections if d.p_target >= self.target_threshold]
         if not targets:
             return {}, []
         if not truth:
@@ -190,15 +192,33 @@ class CalibrationRecorder(Collector):
 
     def columns(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         rows = {c: np.asarray(v) for c, v in self.rows.items()}
-        for c in ("camera", "frame", "object_id", "kind", "det_class"):
+        for c in ("camera", "frame", "object_id", "kind", "det_class", "track_det_class"):
             rows[c] = rows[c].astype(np.int64).reshape(-1)
         for c in ("forward_m", "bearing_rad", "speed_mps", "light"):
             rows[c] = rows[c].astype(np.float64).reshape(-1)
         rows["young"] = rows["young"].astype(bool).reshape(-1)
         rows["hit"] = rows["hit"].astype(bool).reshape(-1)
+        rows["track_hit"] = rows["track_hit"].astype(bool).reshape(-1)
         frames = {c: np.asarray(v) for c, v in self.frames.items()}
-        frames["fa_box"] = frames["fa_box"].astype(np.float64).reshape(-1, 4)
+        for c in ("fa_box", "track_fa_box"):
+            frames[c] = frames[c].astype(np.float64).reshape(-1, 4)
         return rows, frames
+
+
+def _track_target(detection, threshold: float) -> bool:
+    """Whether a detection is a target by its track (``detector.Detector.is_target`` with tracks):
+    its track's decision, or its own P(target) where it carries no track."""
+    if detection.track_p_target is not None:
+        return bool(detection.track_target)
+    return detection.p_target >= threshold
+
+
+def _fa_values(fa: list) -> tuple:
+    """A judged frame's false-alarm columns from its unmatched target detections (the first one)."""
+    if not fa:
+        return False, np.nan, (0, 0, 0, 0), -1
+    first = fa[0]
+    return True, float(first.features[3]), tuple(first.box_px), DETECTOR_CLASSES.index(first.cls)
 
 
 def merge_columns(parts: Sequence[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:

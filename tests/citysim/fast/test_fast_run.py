@@ -52,6 +52,19 @@ def test_false_alarms_light_lamps_with_nobody_there(scenario):
     assert triggers(noisy) > 0 and noisy["false_on_time_s"] > 0.0
 
 
+def test_controllers_deciding_per_track_draw_the_track_decisions_false_alarms(scenario):
+    # frame decisions raise false alarms, track decisions none (insects make no plausible track)
+    empty = scenario_from_mapping(tiny_scenario(traffic={"classes": {}}))
+    model = constant_model(1.0, fa_start_p=0.05)
+    model.track = {**model.track, "fa_start_p": [0.0, 0.0]}
+    assert fast(empty, "detector_confirmed", model)["false_on_time_s"] > 0.0
+    for name in ("detector_tracked", "detector_located"):
+        spec = {"light_blind_ends": False} if name == "detector_located" else {}
+        assert fast(empty, name, model, **spec)["false_on_time_s"] == 0.0, name
+    # a scenario may turn tracks on for detector_confirmed: then it draws the track decisions too
+    assert fast(empty, "detector_confirmed", model, tracking=True)["false_on_time_s"] == 0.0
+
+
 def test_threshold_baselines_trigger_on_the_drawn_region_share(scenario):
     # every judged frame reports a region of 1 % of the frame: above 0.5 %, below 5 %
     model = constant_model(0.0, area_fraction=0.01)

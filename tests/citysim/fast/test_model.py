@@ -80,6 +80,27 @@ def test_detected_classes_and_threshold_areas_come_from_their_frames():
     assert background_age_bin(1.0) == 0 and background_age_bin(1 / 32) == 1 and background_age_bin(1 / 500) == 2
 
 
+def test_the_track_decisions_have_their_own_hit_and_false_alarm_tables():
+    # frame decisions: an insect is a target in 1 judged frame of 10 and a walker in 3 of 4; its
+    # track decisions (plausibility) call the insect a target in 1 frame of 100, the walker in 1 of 2
+    n = 400
+    walker = rows(n, forward_m=9.5, hit=np.arange(n) % 4 != 0, det_class=1, track_hit=np.arange(n) % 2 == 0,
+                  track_det_class=1)
+    fa, track_fa = np.arange(1000) % 10 == 0, np.arange(1000) % 100 == 0
+    model = fit_sensor_model(walker, frames(1000, fa=fa, track_fa=track_fa, track_fa_distance_m=7.0),
+                             camera_hours=1.0)
+    tracks = model.for_tracks()
+    assert _cell(model, PED, 9.5) == pytest.approx(0.75, abs=PRIOR_FRAMES / n)
+    assert _cell(tracks, PED, 9.5) == pytest.approx(0.50, abs=PRIOR_FRAMES / n)
+    assert model.fa_per_camera_hour == 100 and tracks.fa_per_camera_hour == 10
+    assert {r[0] for r in tracks.fa_reports} == {7.0}
+    # what the two share is kept; a model fitted without track columns says to recalibrate
+    assert tracks.area_fraction == model.area_fraction and tracks.track is None
+    frame_only = {k: v for k, v in walker.items() if not k.startswith("track_")}
+    with pytest.raises(ValueError, match="recalibrate"):
+        fit_sensor_model(frame_only, frames(10), camera_hours=1.0).for_tracks()
+
+
 def test_a_saved_model_loads_equal(tmp_path):
     model = fit_sensor_model(rows(50, hit=np.arange(50) % 2 == 0, det_class=1), frames(20), camera_hours=1.0, key="k")
     model.save(tmp_path / "m.json")
