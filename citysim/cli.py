@@ -97,7 +97,7 @@ def cmd_render(args) -> int:
     scenario = load_scenario(args.scenario)
     check_output_dir(args.out, "citysim render", RENDER_OUTPUTS)
     stats = render_clip(scenario, args.lamp, args.duration, args.out, start_s=args.start, detect=args.detect,
-                        lamps_full=args.lamps_full, progress=not args.no_progress)
+                        lamps_full=args.lamps_full, progress=not args.no_progress, camera_side=args.camera)
     print(f"{stats['frames']} frames from t = {args.start:g} s, {stats['truth_rows']} truth boxes"
           + (f", target detected in {stats['frames_with_target_detected']} frames" if args.detect else ""))
     print(f"results written to {args.out}/: camera.mp4, truth.csv, topdown.png")
@@ -269,6 +269,9 @@ def _add_render(sub) -> None:
                                     "truth.csv and topdown.png.")
     rd.add_argument("scenario", type=Path, help="scenario YAML file")
     rd.add_argument("--lamp", type=number(int, ge=0), default=0, help="lamp index, 0 .. the scenario's lamps - 1")
+    rd.add_argument("--camera", choices=("forward", "backward"), default="forward",
+                    help="which of the pole's cameras: its own (forward) or the backward one "
+                         "(scenarios with lamps.camera.back_heading_deg)")
     rd.add_argument("--start", type=number(float, ge=0, unit="s"), default=0.0,
                     help="seconds into the night the clip starts (within the scenario's duration_s)")
     rd.add_argument("--duration", type=number(float, gt=0, le=MAX_DURATION_S, unit="s"), default=20.0,

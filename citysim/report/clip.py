@@ -25,18 +25,26 @@ from detector.outdir import staged_output
 TRUTH_CSV_HEADER = ["frame", "t_s", "object_id", "cls", "x", "y", "w", "h", "touches_border"]
 
 
+#: Which of a pole's cameras ``render_clip`` films: its own (looking the lamps' heading) or the
+#: backward one (``lamps.camera.back_heading_deg``).
+CAMERA_SIDES = ("forward", "backward")
+
+
 def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path, *, start_s: float = 0.0,
-                detect: bool = False, lamps_full: bool = False, progress: bool = True) -> dict:
-    """Render lamp ``lamp``'s camera from ``start_s`` for ``duration_s`` simulated seconds into ``out_dir``.
+                detect: bool = False, lamps_full: bool = False, progress: bool = True,
+                camera_side: str = "forward") -> dict:
+    """Render lamp ``lamp``'s camera (``camera_side``: its forward or backward one) from ``start_s``
+    for ``duration_s`` simulated seconds into ``out_dir``.
 
     The traffic runs from the start of the night; frames are taken from ``start_s`` on. With
     ``detect`` the video shows the truth (left) beside the detector's boxes (right), each half
     captioned.
     """
-    check_clip(scenario, lamp, duration_s, start_s)  # before the night is built: a mistake costs nothing
+    check_clip(scenario, lamp, duration_s, start_s, camera_side)  # before the night is built: a mistake costs nothing
     night = build_night(scenario)
     night.start_physics()
-    renderer = night.renderer(lamp)
+    # Street.cameras: the poles' own cameras in lamp order, then the backward ones
+    renderer = night.renderer(lamp if camera_side == "forward" else night.n_lamps + lamp)
     camera = renderer.camera
     level = 1.0 if lamps_full else scenario.lamps.luminaire.dim_level
     levels = np.full(night.n_lamps, level)
@@ -57,7 +65,7 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
             with open(stage / "truth.csv", "w", newline="") as fh:
                 rows = csv.writer(fh)
                 rows.writerow(TRUTH_CSV_HEADER)
-                for k in tqdm(range(n_frames), unit="frame", desc=f"render lamp {lamp}", disable=not progress):
+                for k in tqdm(range(n_frames), unit="frame", desc=f"render lamp {lamp} {camera_side}", disable=not progress):
                     t = start_s + k / fps
                     night.run_until(t + 1e-6)  # the physics tick at t included
                     agents = night.agents
@@ -75,11 +83,16 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
     return stats
 
 
-def check_clip(scenario: Scenario, lamp: int, duration_s: float, start_s: float) -> None:
+def check_clip(scenario: Scenario, lamp: int, duration_s: float, start_s: float, camera_side: str = "forward") -> None:
     """The clip's arguments against the scenario, before anything is built or rendered."""
     n_lamps = len(scenario.lamps.positions_x_m)
     if not 0 <= lamp < n_lamps:
         raise RunError(f"--lamp: must be in 0..{n_lamps - 1} for {scenario.name}, got {lamp}")
+    if camera_side not in CAMERA_SIDES:
+        raise RunError(f"--camera: must be one of {', '.join(CAMERA_SIDES)}, got {camera_side!r}")
+    if camera_side == "backward" and scenario.lamps.cameras_per_pole < 2:
+        raise RunError(f"--camera: {scenario.name} has no backward cameras (set lamps.camera.back_heading_deg, "
+                       "as scenarios/suburban_night_two_way.yaml does)")
     if not duration_s > 0:
         raise RunError(f"--duration: must be > 0 s, got {duration_s}")
     if not 0 <= start_s < scenario.duration_s:

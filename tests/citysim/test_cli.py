@@ -87,6 +87,17 @@ def test_render_writes_video_truth_and_topdown(tmp_path):
     assert is_real_plot(out / "topdown.png")
 
 
+def test_render_films_a_poles_backward_camera(tmp_path):
+    # the camera looks along -x (heading 170 deg): the truth boxes are those of another view
+    scenario = tiny(tmp_path, **{"lamps.camera.back_heading_deg": 170})
+    outs = {side: tmp_path / side for side in ("forward", "backward")}
+    for side, out in outs.items():
+        assert main(["render", str(scenario), "--lamp", "2", "--duration", "10", "--camera", side, "--out", str(out),
+                     "--no-progress"]) == 0
+    truth = {side: (out / "truth.csv").read_text().splitlines()[1:] for side, out in outs.items()}
+    assert truth["forward"] and truth["backward"] and truth["forward"] != truth["backward"]
+
+
 @pytest.mark.parametrize(
     ("change", "needles"),
     [
@@ -151,6 +162,8 @@ BAD_NUMBERS = [
     (["render", "{scenario}", "--lamp", "-1"], ["argument --lamp", ">= 0"]),
     (["render", "{scenario}", "--lamp", "3"], ["--lamp", "must be in 0..2"]),  # tiny has 3 lamps
     (["render", "{scenario}", "--duration", "0"], ["argument --duration", "> 0"]),
+    (["render", "{scenario}", "--camera", "left"], ["argument --camera", "forward", "backward"]),
+    (["render", "{scenario}", "--camera", "backward"], ["--camera", "no backward cameras", "back_heading_deg"]),
     (["render", "{scenario}", "--start", "-1"], ["argument --start", ">= 0"]),
     (["render", "{scenario}", "--start", "20"], ["--start", "< 20 s"]),  # tiny's night is 20 s
     (["sweep", "{scenario}", "--workers", "0"], ["argument --workers", ">= 1"]),
