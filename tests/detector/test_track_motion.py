@@ -58,6 +58,12 @@ def test_a_car_spot_moving_steadily_away_is_a_vehicle_though_its_frames_look_lik
     assert track.cls == "vehicle"  # 10 m/s: faster than walkers and cyclists go
 
 
+def test_with_the_motion_rule_off_the_spot_stays_rejected_by_its_size():
+    track = _track(_spot_going_away)
+    TrackSet(scene_b(), CLASSES, motion=MotionLimits(enabled=False))._judge(track)
+    assert not track.target and track.reason == "size outside Table 1"
+
+
 def test_the_straight_line_fit_recovers_the_speed_through_the_jitter():
     vf, vr, residual_m, forward_m = line_fit([(k / FPS, *_spot_going_away(k)) for k in range(15)])
     assert vf == pytest.approx(10.0, abs=0.5) and abs(vr) < 0.1
