@@ -42,6 +42,8 @@ SIZE_FRAMES = 15
 ACCEL_FRAMES = 15
 #: Frames of image-centre history kept for the oscillation test.
 SWAY_FRAMES = 30
+#: Frames of ground positions kept for the vehicle-motion test (``detector.tracks.motion``).
+PATH_FRAMES = 30
 #: Probabilities are floored here before the logarithm (a 0 would veto a class for good).
 _P_FLOOR = 1e-4
 POOLINGS = ("mean_log", "mean", "last")
@@ -111,6 +113,8 @@ class Track:
     velocity_mps: tuple[float, float] | None = None  # (forward, right), m/s; None until known
     #: (frame, forward_m, right_m), the last ``VELOCITY_WINDOW_S`` and a bit
     positions: deque = field(default_factory=deque)
+    #: (frame, forward_m, right_m) of the last ``PATH_FRAMES`` sightings, for the vehicle-motion test
+    path: deque = field(default_factory=lambda: deque(maxlen=PATH_FRAMES))
     #: (frame, forward_mps, right_mps): velocities, for the acceleration test
     velocities: deque = field(default_factory=deque)
     widths_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
@@ -245,6 +249,7 @@ class Track:
         self._note_size_px(w, h)
         self.last_frame = self.first_frame
         self.positions.append((self.first_frame, *ground))
+        self.path.append((self.first_frame, *ground))
         self.widths_m.append(features[0])
         self.heights_m.append(features[1])
         self.centres_x_px.append(x + w / 2)
@@ -258,6 +263,7 @@ class Track:
     def _update_velocity(self, frame: int) -> None:
         positions = self.positions
         positions.append((frame, self.forward_m, self.right_m))
+        self.path.append((frame, self.forward_m, self.right_m))
         window = VELOCITY_WINDOW_S * self.fps
         while len(positions) > 2 and frame - positions[1][0] >= window:
             positions.popleft()

@@ -9,7 +9,9 @@ classifier:
 2. ``update(prepared, probabilities)``: every track continued or started, its pooled class
    and p_target (``track.pool_probabilities``), its plausibility (``plausibility``) and its
    target decision: a target track is plausible and its pooled p_target reaches the
-   threshold. Returns one ``TrackView`` per region.
+   threshold, or it moves like a road vehicle (``motion``: straight, steady, 3-20 m/s, a steady
+   size), which outweighs frames of noise or of no Table 1 size (a car's headlight spot going
+   away from the camera). Returns one ``TrackView`` per region.
 
 Tracks unseen for more than ``max_missed_frames`` frames end, except a target that had
 stopped (ground speed under the plausibility limits' ``still_mps``): background subtraction
@@ -30,11 +32,13 @@ from detector.camera import CameraModel
 from detector.features import RegionGeometry
 from detector.tracks.associate import Gates, associate
 from detector.tracks.ground import GroundProjector
+from detector.tracks.motion import OVERRIDDEN_REASONS, MotionLimits, motion_class, steady_motion
 from detector.tracks.plausibility import PlausibilityLimits, note_acceleration, reject_reason
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
 from detector.tracks.track import POOLINGS, Track
 
 _DEFAULT_LIMITS = PlausibilityLimits()
+_DEFAULT_MOTION = MotionLimits()
 _DEFAULT_GATES = Gates()
 _DEFAULT_REUNITE = ReuniteParams()
 
@@ -78,6 +82,7 @@ class TrackSet:
         *,
         geometry: RegionGeometry | None = None,
         limits: PlausibilityLimits = _DEFAULT_LIMITS,
+        motion: MotionLimits = _DEFAULT_MOTION,
         gates: Gates = _DEFAULT_GATES,
         reunite: ReuniteParams | None = _DEFAULT_REUNITE,
         pooling: str = "mean_log",
@@ -100,6 +105,7 @@ class TrackSet:
         self.noise_col = self.class_names.index("noise")
         self.target_threshold = float(target_threshold)
         self.limits, self.gates, self.reunite, self.pooling = limits, gates, reunite, pooling
+        self.motion = motion
         self.max_missed_frames = int(max_missed_frames)
         self.still_hold_frames = round(still_hold_s * camera.fps)
         self.confirm_k, self.confirm_n = int(confirm_k), int(confirm_n)
@@ -239,6 +245,10 @@ class TrackSet:
         reason = reject_reason(track, self.limits)
         if reason is None and track.p_target < self.target_threshold:
             reason = "classified noise"
+        # a steady vehicle's motion outweighs frames that look like noise (a car's headlight spot)
+        if reason in OVERRIDDEN_REASONS and steady_motion(track, self.motion):
+            reason = None
+            track.cls = motion_class(track, track.cls, self.motion)
         track.reason = reason
         track.target = reason is None
         track.hit_bits = ((track.hit_bits << 1) | track.target) & self._mask

@@ -1,0 +1,139 @@
+"""A track that moves like a road vehicle is a target, whatever its frames look like.
+
+At night a car going away from a camera shows the camera its dark back and, ahead of it, the
+bright spot its headlights throw on the road. Background subtraction often keeps the spot and
+loses the body (on suburban_night at 02:00 the body differs from the road by about the noise
+threshold while the spot is far brighter), so the region is the spot: 7-9 m wide, and as a
+standing body at its bottom row 2.5-4 m tall. Every frame is then 'classified noise' with its
+size 'outside Table 1', and the car crosses zone after zone unconfirmed (suburban_night at
+02:00, seed 1: two cars going +x left 17 zone entries dark). Yet the spot's track is what
+only a vehicle makes: it moves at the car's speed, straight, for as long as it is in view, at
+a steady size, its bottom row on the road. An insect near the lens (the false alarm the track
+rules are for) does none of that: it jumps metres on the ground between frames, loops and
+changes size as it flutters, so the rules of ``detector.tracks.plausibility`` other than the
+size check reject it first.
+
+``steady_motion(track, limits)``: the track's ground positions of the last ``window_s`` (at least
+``min_age_s`` of them, ``min_points`` sightings; ``Track.path``) lie on a straight line walked at a
+constant speed: a least-squares fit of forward and right position against time leaves an RMS
+residual under ``max_residual_share`` of the distance from the pole (a pixel row is 0.3 m at 20 m,
+and a spot's fuzzy near edge stalls and jumps a few rows; an insect's ground point jumps metres),
+and the fitted speed is between ``min_speed_mps`` and ``max_speed_mps``. A straight-line fit, not
+the track's half-second velocities: those follow each stall and jump of the bottom row
+(a car at 10 m/s measured at 4-15 m/s within a second), while the fit over a second does not. The
+estimated width and height (m) must vary less than ``max_size_variation`` (coefficient of
+variation) and stay under ``max_width_m`` and ``max_height_m`` (a car with its beam, not a lamp
+switching in the whole view). Such a track is a target even when it was rejected as 'size
+outside Table 1', 'classified noise' or 'erratic' (``OVERRIDDEN_REASONS``: 'erratic' because the
+acceleration test differentiates those same jumpy velocities; the fit is the stricter test of a
+steady motion); 'too few frames', 'too fast' and 'size unsteady' still reject. Its class
+(``motion_class``): a vehicle above ``vehicle_above_mps`` (faster than walkers and cyclists go in
+town), else its likeliest target class.
+
+Speeds m/s on the ground, positions and sizes m, times s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from detector.tracks.track import Track
+
+#: The rejections a steady vehicle-like motion outweighs (see the module docstring).
+OVERRIDDEN_REASONS = frozenset({"size outside Table 1", "classified noise", "erratic"})
+
+
+@dataclass(frozen=True)
+class MotionLimits:
+    """The motion a vehicle track keeps (see the module docstring); ``enabled`` False: never used."""
+
+    enabled: bool = True
+    window_s: float = 1.0
+    min_age_s: float = 0.5
+    min_points: int = 6
+    min_speed_mps: float = 3.0
+    max_speed_mps: float = 20.0
+    max_residual_share: float = 0.08  # of the distance from the pole
+    max_size_variation: float = 0.2
+    max_width_m: float = 12.0
+    max_height_m: float = 5.0
+    vehicle_above_mps: float = 8.5
+
+    def __post_init__(self) -> None:
+        if isinstance(self.min_points, bool) or not isinstance(self.min_points, int) or self.min_points < 3:
+            raise ValueError(f"MotionLimits.min_points: must be an integer >= 3, got {self.min_points!r}")
+        for name in ("window_s", "min_age_s", "min_speed_mps", "max_speed_mps", "max_residual_share",
+                     "max_size_variation", "max_width_m", "max_height_m", "vehicle_above_mps"):  # fmt: skip
+            value = getattr(self, name)
+            if not value > 0:
+                raise ValueError(f"MotionLimits.{name}: must be > 0, got {value!r}")
+        if not self.min_speed_mps < self.max_speed_mps:
+            raise ValueError(f"MotionLimits: need min_speed_mps < max_speed_mps, got {self.min_speed_mps!r} "
+                             f"and {self.max_speed_mps!r}")  # fmt: skip
+        if not self.min_age_s <= self.window_s:
+            raise ValueError(f"MotionLimits: need min_age_s <= window_s, got {self.min_age_s!r} and {self.window_s!r}")
+
+
+def _variation(values) -> float:
+    """Coefficient of variation (population standard deviation / mean); inf for a mean <= 0."""
+    n = len(values)
+    mean = sum(values) / n
+    if mean <= 0:
+        return math.inf
+    return math.sqrt(sum((v - mean) ** 2 for v in values) / n) / mean
+
+
+def line_fit(points) -> tuple[float, float, float, float]:
+    """Least-squares straight line through (t_s, forward_m, right_m) points: (forward velocity m/s,
+    right velocity m/s, RMS residual m of the 2-D positions, mean forward_m)."""
+    n = len(points)
+    mt = sum(p[0] for p in points) / n
+    mf = sum(p[1] for p in points) / n
+    mr = sum(p[2] for p in points) / n
+    stt = sum((p[0] - mt) ** 2 for p in points)
+    vf = sum((p[0] - mt) * (p[1] - mf) for p in points) / stt
+    vr = sum((p[0] - mt) * (p[2] - mr) for p in points) / stt
+    sq = sum((p[1] - mf - vf * (p[0] - mt)) ** 2 + (p[2] - mr - vr * (p[0] - mt)) ** 2 for p in points)
+    return vf, vr, math.sqrt(sq / n), mf
+
+
+def recent_path(track: Track, window_s: float) -> list[tuple[float, float, float]]:
+    """(t_s, forward_m, right_m) of the track's sightings within ``window_s`` of its last, t from its first."""
+    fps, last = track.fps, track.last_frame
+    return [((f - track.first_frame) / fps, a, b) for f, a, b in track.path if last - f <= window_s * fps]
+
+
+def steady_motion(track: Track, limits: MotionLimits) -> bool:
+    """Whether ``track`` moved like a road vehicle over its last ``window_s`` (module docstring)."""
+    return unsteady_because(track, limits) is None
+
+
+def unsteady_because(track: Track, limits: MotionLimits) -> str | None:
+    """Why ``track`` did not move like a road vehicle (None: it did); for ``steady_motion`` and diagnosis."""
+    if not limits.enabled:
+        return "disabled"
+    points = recent_path(track, limits.window_s)
+    if len(points) < limits.min_points or points[-1][0] - points[0][0] < limits.min_age_s:
+        return "too young"
+    vf, vr, residual_m, forward_m = line_fit(points)
+    if not limits.min_speed_mps <= math.hypot(vf, vr) <= limits.max_speed_mps:
+        return "speed out of range"
+    if residual_m > limits.max_residual_share * max(forward_m, 1.0):
+        return "not a straight steady path"
+    widths, heights = track.widths_m, track.heights_m
+    if max(widths) > limits.max_width_m or max(heights) > limits.max_height_m:
+        return "too big"
+    if _variation(widths) > limits.max_size_variation or _variation(heights) > limits.max_size_variation:
+        return "size unsteady"
+    return None
+
+
+def motion_class(track: Track, likeliest: str, limits: MotionLimits) -> str:
+    """The class of a track taken for its motion: a vehicle when its fitted speed over ``window_s`` is
+    above what walkers and cyclists go, else ``likeliest`` (its classifier's target class)."""
+    points = recent_path(track, limits.window_s)
+    if len(points) < 3:
+        return likeliest
+    vf, vr, _, _ = line_fit(points)
+    return "vehicle" if math.hypot(vf, vr) > limits.vehicle_above_mps else likeliest
