@@ -79,6 +79,7 @@ def test_a_young_track_is_not_judged_by_its_motion():
     ("ground_at", "why"),
     [
         (lambda k: (10.0 + 1.0 * k / FPS, 1.5), "speed out of range"),  # a walker's pace: no vehicle
+        (lambda k: (10.0 + 3.5 * k / FPS, 1.5), "speed out of range"),  # a jogger's flashlight spot
         (lambda k: (10.0 + 30.0 * k / FPS, 1.5), "speed out of range"),  # 108 km/h: nothing on a town street
         # an insect near the lens: its ground point jumps metres between frames
         (lambda k: (10.0 + 10.0 * k / FPS + (4.0 if k % 2 else -4.0), 1.5 + 3.0 * math.sin(k)), "not a straight steady path"),
@@ -98,17 +99,22 @@ def test_size_jumps_or_a_whole_view_region_are_no_vehicle():
         track.observe(k, [100, 60, 120, 40], _spot_going_away(k), [w, 3.0], NOISE)
     assert unsteady_because(track, MotionLimits()) == "size unsteady"
     assert unsteady_because(_track(_spot_going_away, size_m=(20.0, 3.0)), MotionLimits()) == "too big"
+    # a piece of a cyclist or a car, or a low speck, moving at a vehicle's speed: no vehicle by motion
+    assert unsteady_because(_track(_spot_going_away, size_m=(0.5, 0.7)), MotionLimits()) == "too small"
+    assert unsteady_because(_track(_spot_going_away, size_m=(3.0, 0.7)), MotionLimits()) == "too small"
 
 
 def test_motion_class_is_the_classifiers_below_vehicle_speed():
     assert motion_class(_track(_spot_going_away), "cyclist", MotionLimits()) == "vehicle"
-    slow = _track(lambda k: (10.0 + 5.0 * k / FPS, 1.5))  # an e-scooter's 18 km/h
+    slow = _track(lambda k: (10.0 + 6.0 * k / FPS, 1.5))  # an e-scooter's 22 km/h
     assert motion_class(slow, "cyclist", MotionLimits()) == "cyclist"
 
 
 def test_motion_limits_name_the_bad_field():
     with pytest.raises(ValueError, match="min_points"):
         MotionLimits(min_points=2)
+    with pytest.raises(ValueError, match="min_height_m"):
+        MotionLimits(min_height_m=0.0)
     with pytest.raises(ValueError, match="max_residual_share"):
         MotionLimits(max_residual_share=0.0)
     with pytest.raises(ValueError, match="min_speed_mps < max_speed_mps"):
