@@ -13,7 +13,7 @@ rules are for) does none of that: it jumps metres on the ground between frames, 
 changes size as it flutters, so the rules of ``detector.tracks.plausibility`` other than the
 size check reject it first.
 
-``steady_motion(track, limits)``: the track's ground positions of the last ``window_s`` (at least
+``steady_speed_mps(track, limits)``: the track's ground positions of the last ``window_s`` (at least
 ``min_age_s`` of them, ``min_points`` sightings; ``Track.path``) lie on a straight line walked at a
 constant speed: a least-squares fit of forward and right position against time leaves an RMS
 residual under ``max_residual_share`` of the distance from the pole (a pixel row is 0.3 m at 20 m,
@@ -42,6 +42,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from detector.tracks.checks import require_int_at_least, require_positive
 from detector.tracks.track import Track, median
 
 #: The rejections a steady vehicle-like motion outweighs (see the module docstring).
@@ -69,14 +70,10 @@ class MotionLimits:
     vehicle_above_mps: float = 8.5
 
     def __post_init__(self) -> None:
-        if isinstance(self.min_points, bool) or not isinstance(self.min_points, int) or self.min_points < 3:
-            raise ValueError(f"MotionLimits.min_points: must be an integer >= 3, got {self.min_points!r}")
-        for name in ("window_s", "min_age_s", "min_speed_mps", "max_speed_mps", "max_residual_share",
-                     "max_size_variation", "min_width_m", "min_height_m", "max_width_m", "max_height_m",
-                     "vehicle_above_mps"):  # fmt: skip
-            value = getattr(self, name)
-            if not value > 0:
-                raise ValueError(f"MotionLimits.{name}: must be > 0, got {value!r}")
+        require_int_at_least(self, ("min_points",), 3)
+        require_positive(self, ("window_s", "min_age_s", "min_speed_mps", "max_speed_mps", "max_residual_share",
+                                "max_size_variation", "min_width_m", "min_height_m", "max_width_m", "max_height_m",
+                                "vehicle_above_mps"))  # fmt: skip
         if not self.min_speed_mps < self.max_speed_mps:
             raise ValueError(f"MotionLimits: need min_speed_mps < max_speed_mps, got {self.min_speed_mps!r} "
                              f"and {self.max_speed_mps!r}")  # fmt: skip
@@ -113,38 +110,42 @@ def recent_path(track: Track, window_s: float) -> list[tuple[float, float, float
     return [((f - track.first_frame) / fps, a, b) for f, a, b in track.path if last - f <= window_s * fps]
 
 
-def steady_motion(track: Track, limits: MotionLimits) -> bool:
-    """Whether ``track`` moved like a road vehicle over its last ``window_s`` (module docstring)."""
-    return unsteady_because(track, limits) is None
+def steady_speed_mps(track: Track, limits: MotionLimits) -> float | None:
+    """The fitted ground speed, m/s, of a ``track`` that moved like a road vehicle over its last
+    ``window_s`` (module docstring); None if it did not."""
+    reason, speed_mps = _judge(track, limits)
+    return speed_mps if reason is None else None
 
 
 def unsteady_because(track: Track, limits: MotionLimits) -> str | None:
-    """Why ``track`` did not move like a road vehicle (None: it did); for ``steady_motion`` and diagnosis."""
+    """Why ``track`` did not move like a road vehicle (None: it did), for diagnosis."""
+    return _judge(track, limits)[0]
+
+
+def _judge(track: Track, limits: MotionLimits) -> tuple[str | None, float]:
+    """(why the track did not move like a road vehicle or None, its fitted speed m/s; nan unfitted)."""
     if not limits.enabled:
-        return "disabled"
+        return "disabled", math.nan
     points = recent_path(track, limits.window_s)
     if len(points) < limits.min_points or points[-1][0] - points[0][0] < limits.min_age_s:
-        return "too young"
+        return "too young", math.nan
     vf, vr, residual_m, forward_m = line_fit(points)
-    if not limits.min_speed_mps <= math.hypot(vf, vr) <= limits.max_speed_mps:
-        return "speed out of range"
+    speed_mps = math.hypot(vf, vr)
+    if not limits.min_speed_mps <= speed_mps <= limits.max_speed_mps:
+        return "speed out of range", speed_mps
     if residual_m > limits.max_residual_share * max(forward_m, 1.0):
-        return "not a straight steady path"
+        return "not a straight steady path", speed_mps
     widths, heights = track.widths_m, track.heights_m
     if max(widths) > limits.max_width_m or max(heights) > limits.max_height_m:
-        return "too big"
+        return "too big", speed_mps
     if median(widths) < limits.min_width_m or median(heights) < limits.min_height_m:
-        return "too small"
+        return "too small", speed_mps
     if _variation(widths) > limits.max_size_variation or _variation(heights) > limits.max_size_variation:
-        return "size unsteady"
-    return None
+        return "size unsteady", speed_mps
+    return None, speed_mps
 
 
-def motion_class(track: Track, likeliest: str, limits: MotionLimits) -> str:
-    """The class of a track taken for its motion: a vehicle when its fitted speed over ``window_s`` is
-    above what walkers and cyclists go, else ``likeliest`` (its classifier's target class)."""
-    points = recent_path(track, limits.window_s)
-    if len(points) < 3:
-        return likeliest
-    vf, vr, _, _ = line_fit(points)
-    return "vehicle" if math.hypot(vf, vr) > limits.vehicle_above_mps else likeliest
+def motion_class(speed_mps: float, likeliest: str, limits: MotionLimits) -> str:
+    """The class of a track taken for its motion at fitted ``speed_mps``: a vehicle above what walkers
+    and cyclists go, else ``likeliest`` (its classifier's target class)."""
+    return "vehicle" if speed_mps > limits.vehicle_above_mps else likeliest

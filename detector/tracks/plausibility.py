@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from detector.classes import TABLE1
+from detector.tracks.checks import require_int_at_least, require_positive
 from detector.tracks.track import SWAY_FRAMES, Track, median
 
 
@@ -73,15 +74,9 @@ class PlausibilityLimits:
     max_sway_drift_share: float = 0.3  # of the swing
 
     def __post_init__(self) -> None:
-        for name in ("min_frames", "max_accel_violations"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"PlausibilityLimits.{name}: must be an integer >= 1, got {value!r}")
-        for name in ("max_speed_mps", "max_accel_mps2", "size_tolerance", "max_height_variation", "still_mps",
-                     "min_sway_share", "max_sway_drift_share"):  # fmt: skip
-            value = getattr(self, name)
-            if not value > 0:
-                raise ValueError(f"PlausibilityLimits.{name}: must be > 0, got {value!r}")
+        require_int_at_least(self, ("min_frames", "max_accel_violations"), 1)
+        require_positive(self, ("max_speed_mps", "max_accel_mps2", "size_tolerance", "max_height_variation",
+                                "still_mps", "min_sway_share", "max_sway_drift_share"))  # fmt: skip
 
 
 def note_acceleration(track: Track, limits: PlausibilityLimits) -> None:

@@ -9,7 +9,7 @@ classifier:
 2. ``update(prepared, probabilities)``: every track continued or started, its pooled class
    and p_target (``track.pool_probabilities``), its plausibility (``plausibility``) and its
    target decision: a target track is plausible and its pooled p_target reaches the
-   threshold, or it moves like a road vehicle (``motion``: straight, steady, 3-20 m/s, a steady
+   threshold, or it moves like a road vehicle (``motion``: straight, steady, 5-20 m/s, a steady
    size), which outweighs frames of noise or of no Table 1 size (a car's headlight spot going
    away from the camera). Returns one ``TrackView`` per region.
 
@@ -32,7 +32,7 @@ from detector.camera import CameraModel
 from detector.features import RegionGeometry
 from detector.tracks.associate import Gates, associate
 from detector.tracks.ground import GroundProjector
-from detector.tracks.motion import OVERRIDDEN_REASONS, MotionLimits, motion_class, steady_motion
+from detector.tracks.motion import OVERRIDDEN_REASONS, MotionLimits, motion_class, steady_speed_mps
 from detector.tracks.plausibility import PlausibilityLimits, note_acceleration, reject_reason
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
 from detector.tracks.track import POOLINGS, Track
@@ -246,9 +246,11 @@ class TrackSet:
         if reason is None and track.p_target < self.target_threshold:
             reason = "classified noise"
         # a steady vehicle's motion outweighs frames that look like noise (a car's headlight spot)
-        if reason in OVERRIDDEN_REASONS and steady_motion(track, self.motion):
-            reason = None
-            track.cls = motion_class(track, track.cls, self.motion)
+        if reason in OVERRIDDEN_REASONS:
+            speed_mps = steady_speed_mps(track, self.motion)
+            if speed_mps is not None:
+                reason = None
+                track.cls = motion_class(speed_mps, track.cls, self.motion)
         track.reason = reason
         track.target = reason is None
         track.hit_bits = ((track.hit_bits << 1) | track.target) & self._mask

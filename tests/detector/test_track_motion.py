@@ -17,7 +17,7 @@ from detector.tracks.motion import (
     MotionLimits,
     line_fit,
     motion_class,
-    steady_motion,
+    steady_speed_mps,
     unsteady_because,
 )
 from detector.tracks.plausibility import PlausibilityLimits, reject_reason
@@ -51,7 +51,7 @@ def test_a_car_spot_moving_steadily_away_is_a_vehicle_though_its_frames_look_lik
     track = _track(_spot_going_away)
     # the frame rules alone reject it: 8 m wide, 3 m 'tall' fits no Table 1 class
     assert reject_reason(track, PlausibilityLimits()) == "size outside Table 1"
-    assert steady_motion(track, MotionLimits())
+    assert steady_speed_mps(track, MotionLimits()) is not None
     tracks = TrackSet(scene_b(), CLASSES)
     tracks._judge(track)
     assert track.target and track.reason is None
@@ -105,9 +105,10 @@ def test_size_jumps_or_a_whole_view_region_are_no_vehicle():
 
 
 def test_motion_class_is_the_classifiers_below_vehicle_speed():
-    assert motion_class(_track(_spot_going_away), "cyclist", MotionLimits()) == "vehicle"
+    limits = MotionLimits()
+    assert motion_class(steady_speed_mps(_track(_spot_going_away), limits), "cyclist", limits) == "vehicle"
     slow = _track(lambda k: (10.0 + 6.0 * k / FPS, 1.5))  # an e-scooter's 22 km/h
-    assert motion_class(slow, "cyclist", MotionLimits()) == "cyclist"
+    assert motion_class(steady_speed_mps(slow, limits), "cyclist", limits) == "cyclist"
 
 
 def test_motion_limits_name_the_bad_field():
