@@ -93,10 +93,19 @@ class Controller:
     uses_camera: ClassVar[bool] = False
     senses: ClassVar[bool] = True  # pays the sensing power (camera/board/IR or PIR)
     initial_level: ClassVar[str] = "dim"  # "dim" or "full"
+    #: takes the detector's track decisions rather than each frame's (camera controllers that
+    #: run the detector; a scenario's controller spec may override it)
+    tracking: ClassVar[bool] = False
 
     def __init__(self, ctx: ControlContext):
         self.ctx = ctx
         self.bank = LampBank(ctx)
+
+    @classmethod
+    def decides_per_track(cls, spec) -> bool:
+        """Whether this controller, as ``spec`` (a ``ControllerSpec``) sets it up, decides on the
+        detector's tracks: the class's ``tracking`` unless the spec sets it."""
+        return cls.tracking if spec.tracking is None else bool(spec.tracking)
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         self.bank.release_expired(t_s)

@@ -46,7 +46,7 @@ class DetectorPerFrame(Controller):
             from detector.general_model import default_model
 
             model = default_model()
-            tracking = self.tracking if ctx.spec.tracking is None else ctx.spec.tracking
+            tracking = self.decides_per_track(ctx.spec)
             # one detector per camera, with that camera's pose: its ground positions are the street's
             self.detectors = [Detector(site.camera, model=model, target_threshold=threshold, tracking=tracking)
                               for site in ctx.street.cameras]  # fmt: skip

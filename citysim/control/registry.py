@@ -25,10 +25,3 @@ CONTROLLERS: dict[str, type[Controller]] = {
         DetectorPerFrame, DetectorConfirmed, DetectorTracked, DetectorNetwork, DetectorLocated,
     )
 }  # fmt: skip
-
-
-def decides_per_track(spec) -> bool:
-    """Whether the controller of ``spec`` (a ``ControllerSpec``) takes the detector's track decisions
-    rather than each frame's: its class's ``tracking``, unless the spec sets it."""
-    default = bool(getattr(CONTROLLERS[spec.name], "tracking", False))
-    return default if spec.tracking is None else bool(spec.tracking)

@@ -26,7 +26,7 @@ from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.base import ControlContext, Controller
 from citysim.control.lamps import Lamp, levels_at
 from citysim.control.network import Network
-from citysim.control.registry import CONTROLLERS, decides_per_track
+from citysim.control.registry import CONTROLLERS
 from citysim.fast import FIDELITIES
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import ConfusionCollector
@@ -148,7 +148,7 @@ def run_controller(
         from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
 
         # a controller deciding per track draws from the fit on track decisions (insects seldom make one)
-        model = sensor_model.for_tracks() if decides_per_track(spec) else sensor_model
+        model = sensor_model.for_tracks() if CONTROLLERS[spec.name].decides_per_track(spec) else sensor_model
         sensors = fast_sensors(night, model)
     controller = build_controller(night, spec, sensors)
     lamps, label = controller.ctx.lamps, spec.display_name
