@@ -65,6 +65,9 @@ class LampBank:
         self.first_trigger_s = np.full(len(ctx.lamps), math.nan)
         self.last_trigger_s = np.full(len(ctx.lamps), math.nan)
         self.triggers = np.zeros(len(ctx.lamps), dtype=np.int64)
+        # no hold runs out before this time: release_expired has nothing to do until then (lamps
+        # start unheld, so the first call looks at every lamp, as a lamp starting at full needs)
+        self._next_expiry_s = -math.inf
 
     def trigger(self, lamp_index: int, t_s: float, hold_s: float | None = None) -> None:
         if self.triggers[lamp_index] == 0:
@@ -74,16 +77,21 @@ class LampBank:
         until = t_s + (self.ctx.hold_s if hold_s is None else hold_s)
         if until > self.lit_until_s[lamp_index]:
             self.lit_until_s[lamp_index] = until
+        self._next_expiry_s = min(self._next_expiry_s, self.lit_until_s[lamp_index])
         lamp = self.ctx.lamps[lamp_index]
         if lamp.target_level < 1.0:
             lamp.set_target(t_s, 1.0)
 
     def release_expired(self, t_s: float) -> None:
         """Called every physics step: lamps whose hold ran out go back to dim."""
+        if t_s < self._next_expiry_s:
+            return
         for i in np.flatnonzero(self.lit_until_s <= t_s):
             lamp = self.ctx.lamps[i]
             if lamp.target_level > self.ctx.dim_level:
                 lamp.set_target(t_s, self.ctx.dim_level)
+        held = self.lit_until_s[self.lit_until_s > t_s]
+        self._next_expiry_s = float(held.min()) if len(held) else math.inf
 
 
 class Controller:

@@ -132,6 +132,7 @@ class Lamp:
         self._t0_s = float(t0_s)
         self._closed_level_s = 0.0  # integral of level over closed segments, level*s
         self._closed_on_s = 0.0
+        self._reach_s = 0.0  # seconds from the anchor until the level reaches the target
 
     # ------------------------------------------------------------------ control
     @property
@@ -146,7 +147,7 @@ class Lamp:
 
     def is_ramping(self, t_s: float) -> bool:
         """True while the level at ``t_s`` is still moving toward the target."""
-        return t_s < self.reached_at_s()
+        return t_s < self._anchor_t_s + self._reach_s
 
     def _is_on(self, level: float) -> bool:
         return level > self.spec.dim_level
@@ -167,6 +168,8 @@ class Lamp:
         self._anchor_t_s = float(t_s)
         self._anchor_level = now_level
         self._target = float(level)
+        self._reach_s = abs(self._target - now_level) * (self.spec.ramp_up_s if self._target >= now_level
+                                                          else self.spec.fade_s)  # fmt: skip
 
     def advance(self, t_s: float) -> None:
         """Move the lamp's clock to ``t_s``: energy_j and on_time_s now cover [t0, t_s]."""
@@ -186,12 +189,14 @@ class Lamp:
                 f"Lamp {self.index}: level_at(t_s={t_s}) precedes the last target change at "
                 f"{self._anchor_t_s}; past levels are not stored"
             )
-        return _ramp(self._anchor_level, self._target, self.spec, t_s - self._anchor_t_s)[0]
+        dt_s = t_s - self._anchor_t_s
+        if dt_s >= self._reach_s:  # the test _ramp makes: past the ramp the level is the target exactly
+            return self._target
+        return _ramp(self._anchor_level, self._target, self.spec, dt_s)[0]
 
     def reached_at_s(self) -> float:
         """Time (s) at which the level reaches (or reached) the current target."""
-        swing_s = self.spec.ramp_up_s if self._target >= self._anchor_level else self.spec.fade_s
-        return self._anchor_t_s + abs(self._target - self._anchor_level) * swing_s
+        return self._anchor_t_s + self._reach_s
 
     def power_w(self, t_s: float) -> float:
         """Instantaneous electrical power (W) at ``t_s``."""

@@ -77,11 +77,21 @@ class CameraGeometry:
     def box_px(self, lamp_index: int, agent: AgentState) -> tuple[int, int, int, int]:
         """An OpenCV (x, y, w, h) box of ``agent`` in camera ``lamp_index``'s distorted frame, px:
         its bottom centre is the footprint centre's pixel, so ``pixel_to_ground`` puts it back there."""
+        return self.boxes_px(lamp_index, [agent])[0]
+
+    def boxes_px(self, lamp_index: int, agents: Sequence[AgentState]) -> list[tuple[int, int, int, int]]:
+        """``box_px`` of each of ``agents`` in camera ``lamp_index``, their points projected in one call."""
         cam = self.cameras[lamp_index]
-        pts = np.array([[agent.x_m, agent.y_m, 0.0], [agent.x_m, agent.y_m, agent.height_m]], dtype=np.float64)
-        (u0, v0), (_, v1) = cam.project(pts)
-        if not (np.isfinite(u0) and np.isfinite(v0) and np.isfinite(v1)):
-            return (0, 0, 1, 1)
-        h = max(2.0, v0 - v1)
-        w = max(2.0, h * max(agent.width_m, 0.3) / max(agent.height_m, 0.3))
-        return (int(round(u0 - w / 2)), int(round(v0 - h)), int(round(w)), int(round(h)))
+        pts = np.array([p for a in agents for p in ((a.x_m, a.y_m, 0.0), (a.x_m, a.y_m, a.height_m))],
+                       dtype=np.float64).reshape(-1, 3)  # fmt: skip
+        uv = cam.project(pts).tolist()
+        boxes = []
+        for n, agent in enumerate(agents):
+            (u0, v0), (_, v1) = uv[2 * n], uv[2 * n + 1]
+            if not (math.isfinite(u0) and math.isfinite(v0) and math.isfinite(v1)):
+                boxes.append((0, 0, 1, 1))
+                continue
+            h = max(2.0, v0 - v1)
+            w = max(2.0, h * max(agent.width_m, 0.3) / max(agent.height_m, 0.3))
+            boxes.append((int(round(u0 - w / 2)), int(round(v0 - h)), int(round(w)), int(round(h))))
+        return boxes

@@ -32,6 +32,7 @@ Saved as JSON (small tables and capped sample lists).
 
 from __future__ import annotations
 
+import bisect
 import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -89,7 +90,12 @@ def background_age_bin(learning_rate: float | None) -> int:
     if learning_rate is None or learning_rate >= 1.0:
         return 0
     frames_before = 0.5 / learning_rate - 1.0
-    return int(bin_of(np.array([frames_before]), tuple(float(e) for e in AGE_EDGES_FRAMES))[0])
+    return scalar_bin_of(frames_before, AGE_EDGES_FRAMES)
+
+
+def scalar_bin_of(value: float, edges: tuple[float, ...]) -> int:
+    """``bin_of`` of one value, without numpy's per-call cost (asked once per judged frame)."""
+    return min(max(bisect.bisect_right(edges, value) - 1, 0), len(edges) - 1)
 
 
 def threshold_condition(kind: int, forward_m: float, lit: bool, age_bin: int | None = None) -> str:
@@ -98,7 +104,7 @@ def threshold_condition(kind: int, forward_m: float, lit: bool, age_bin: int | N
     if kind < 0:
         key = f"none/{int(lit)}"
     else:
-        key = f"{KINDS[kind]}/{int(bin_of(np.array([forward_m]), DISTANCE_EDGES_M)[0])}"
+        key = f"{KINDS[kind]}/{scalar_bin_of(forward_m, DISTANCE_EDGES_M)}"
     return key if age_bin is None else f"{key}/age{age_bin}"
 
 

@@ -30,14 +30,15 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
         t = env.now
         agents = night.agents
         every = stride <= 1 or k % stride == 0
-        if not every and not agents and not _any_motion(controller, n) and not _any_ramping(lamps, t):
+        ramping = [lamp.is_ramping(t) for lamp in lamps]
+        if not every and not agents and not _any_motion(controller, n) and not any(ramping):
             k += 1  # a still street with nothing moving in view: no camera is judged
             continue
         levels = levels_at(lamps, t)
         sensors.observe(k, agents, levels)
         for i in range(n):
             if not (every or sensors.cand.awake[i] or controller.motion_seen(i)
-                    or any(lamps[j].is_ramping(t) for j in watch[i])):  # fmt: skip
+                    or any(ramping[j] for j in watch[i])):  # fmt: skip
                 continue
             frame = SensedFrame(sensors, i)
             detections = controller.on_frame(i, t, frame)
@@ -48,10 +49,6 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
 
 def _any_motion(controller, n: int) -> bool:
     return any(controller.motion_seen(i) for i in range(n))
-
-
-def _any_ramping(lamps: Sequence[Lamp], t_s: float) -> bool:
-    return any(lamp.is_ramping(t_s) for lamp in lamps)
 
 
 def fast_sensors(night, model) -> FastSensors:

@@ -37,6 +37,7 @@ from detector.segment import SegmenterParams
 DRAWN_P_TARGET = 0.9
 #: Detector range, m: beyond it a candidate is not 'fully visible' truth for the confusion figures.
 DETECTOR_RANGE_M = 25.0
+_NO_INDICES = np.zeros(0, np.int64)
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,9 @@ class FastSensors:
         self.cand = self.geometry.candidates([])
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
+        self._of_camera: list[np.ndarray | None] = [None] * self.geometry.n
+        self._cells: tuple | None = None
+        self._lit_cells: np.ndarray | None = None
 
     def detectors(self, ctx, threshold: float) -> list[SensedDetector]:
         return [SensedDetector(self, i, threshold) for i in range(self.geometry.n)]
@@ -105,17 +109,49 @@ class FastSensors:
             self.agents = agents
             self.cand = self.geometry.candidates(agents)
             self._boxes = {}
+            self._of_camera = [None] * self.geometry.n
+            self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
         xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
         self.light = self.geometry.light_at(xs, levels) if len(agents) else xs
+        self._lit_cells = None
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
-        return np.flatnonzero(self.cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, np.int64)
+        if not self.agents:
+            return _NO_INDICES
+        idx = self._of_camera[lamp_index]
+        if idx is None:
+            idx = self._of_camera[lamp_index] = np.flatnonzero(self.cand.seen[:, lamp_index])
+        return idx
+
+    def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
+        """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
+
+        The cells of every agent for every camera are binned once per frame (one numpy pass, not
+        one per camera); the light bin once per frame's levels."""
+        if self._cells is None:
+            kinds = np.array([KINDS.index(a.cls) for a in self.agents], dtype=np.int64)
+            speed = np.array([a.speed_mps for a in self.agents], dtype=np.float64)
+            cells = cell_of(kinds[:, None], self.cand.forward_m, self.cand.bearing_rad, np.zeros(1), np.zeros(1),
+                            speed[:, None])  # fmt: skip
+            self._cells = (cells[0][:, 0], cells[1], cells[2], cells[5][:, 0])
+        if self._lit_cells is None:
+            self._lit_cells = (self.light >= LIT_LEVEL).astype(np.int64)
+        kind, distance, bearing, speed = self._cells
+        return self.p_hit[kind[idx], distance[idx, lamp_index], bearing[idx, lamp_index], self._lit_cells[idx],
+                          int(young), speed[idx]]  # fmt: skip
 
     def box_px(self, lamp_index: int, agent_index: int) -> tuple[int, int, int, int]:
+        """Agent ``agent_index``'s box in camera ``lamp_index`` this frame; the first ask projects
+        all the camera's candidates at once (a box is asked for a hit, and for every candidate when
+        the frame's truth is scored)."""
         key = (lamp_index, agent_index)
         if key not in self._boxes:
-            self._boxes[key] = self.geometry.box_px(lamp_index, self.agents[agent_index])
+            idx = self.candidates_of(lamp_index).tolist()
+            if agent_index not in idx:
+                idx = [agent_index]
+            for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
+                self._boxes[(lamp_index, j)] = box
         return self._boxes[key]
 
     def lit(self, lamp_index: int) -> int:
@@ -198,9 +234,8 @@ class SensedDetector:
         s, i = self.sensors, self.lamp_index
         agents = [s.agents[j] for j in idx.tolist()]
         kinds = np.array([KINDS.index(a.cls) for a in agents])
-        fwd, bearing = s.cand.forward_m[idx, i], s.cand.bearing_rad[idx, i]
-        speed = np.array([a.speed_mps for a in agents])
-        p = s.p_hit[cell_of(kinds, fwd, bearing, s.light[idx], np.full(len(idx), young), speed)]
+        fwd = s.cand.forward_m[idx, i]
+        p = s.p_hit_of(i, idx, young)
         rho = s.persistence[kinds]
         for n, a in enumerate(agents):
             prev = self.previous.get(a.object_id)

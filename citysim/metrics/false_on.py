@@ -26,6 +26,8 @@ class FalseOnTime(Collector):
         self.seconds = 0.0
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
+        if levels.max(initial=0.0) <= self.dim_level + 1e-6:  # nothing lit: add() would add nothing
+            return
         self.add(self.dt_s, np.array([a.x_m for a in agents if a.is_target]), levels)
 
     def add(self, dt_s: float, target_x_m: np.ndarray, levels: np.ndarray) -> None:

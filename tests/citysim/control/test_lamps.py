@@ -168,3 +168,35 @@ def test_target_level_and_ramping_state_for_controllers():
     lamp.set_target(1.0, 1.0)
     assert lamp.target_level == 1.0
     assert lamp.is_ramping(1.1) and not lamp.is_ramping(1.25)
+
+
+def test_bank_releases_each_lamp_when_its_own_hold_runs_out_not_before():
+    # release_expired skips its scan until the earliest hold ends: a later trigger with a shorter
+    # hold must move that time earlier, and a lamp must never drop while its hold runs
+    from types import SimpleNamespace
+
+    from citysim.control.base import LampBank
+
+    spec = LuminaireSpec(dim_level=0.2, ramp_up_s=0.0, fade_s=0.0)
+    lamps = [Lamp(i, spec, senses=True, initial_level=0.2) for i in range(3)]
+    bank = LampBank(SimpleNamespace(lamps=lamps, hold_s=30.0, dim_level=0.2))
+    bank.trigger(0, 0.0)  # held until 30 s
+    bank.trigger(1, 5.0, hold_s=10.0)  # held until 15 s: earlier than lamp 0's
+    targets = []
+    for t_s in (1.0, 14.9, 15.0, 29.9, 30.0):
+        bank.release_expired(t_s)
+        targets.append([lamp.target_level for lamp in lamps])
+    assert targets == [[1.0, 1.0, 0.2], [1.0, 1.0, 0.2], [1.0, 0.2, 0.2], [1.0, 0.2, 0.2], [0.2, 0.2, 0.2]]
+    bank.trigger(2, 31.0, hold_s=0.0)  # no hold: released at the next step
+    bank.release_expired(31.0)
+    assert lamps[2].target_level == 0.2
+
+
+def test_level_after_the_ramp_is_the_target_exactly_and_ramping_ends_there():
+    spec = LuminaireSpec(dim_level=0.2, ramp_up_s=0.3, fade_s=2.0)
+    lamp = Lamp(0, spec, senses=True, initial_level=0.2)
+    lamp.set_target(1.0, 1.0)
+    assert lamp.is_ramping(1.1) and not lamp.is_ramping(lamp.reached_at_s())
+    assert lamp.level_at(1.0 + 0.8 * 0.3) == 1.0 and lamp.level_at(50.0) == 1.0
+    lamp.set_target(2.0, 0.2)
+    assert lamp.level_at(2.0 + 0.8 * 2.0) == 0.2 and lamp.level_at(3.0) == pytest.approx(0.5)

@@ -39,3 +39,20 @@ def test_a_detection_on_the_ground_near_a_candidate_is_its_hit():
     hits: dict[int, int] = {}
     left = recorder._near_candidates(0, idx, hits, [near_walker, beam, stray])
     assert set(hits) == {1, 2} and left == [stray]
+
+
+def test_boxes_projected_together_equal_boxes_projected_one_by_one():
+    # fast mode projects a camera's candidates in one call; a box must not depend on its company
+    street = build_street(scenario_from_mapping(tiny_scenario()))
+    geometry = CameraGeometry(street)
+    cam = geometry.cameras[0]
+    x0 = float(cam.position_m[0])
+    agents = [agent(1, x0 + 6.0, -4.3), agent(2, x0 + 25.0, -1.6, "vehicle"), agent(3, x0 - 3.0, 1.0),
+              agent(4, x0 + 14.0, 2.2, "cyclist")]  # fmt: skip
+    together = geometry.boxes_px(0, agents)
+    assert together == [geometry.boxes_px(0, [a])[0] for a in agents]
+    assert together[2] == (0, 0, 1, 1)  # behind the camera: no box
+    # the walker's box stands on its footprint: its bottom centre projects back near the feet
+    x, y, w, h = together[0]
+    u, v = cam.project(np.array([[x0 + 6.0, -4.3, 0.0]]))[0]
+    assert abs(x + w / 2 - u) <= 1.0 and abs(y + h - v) <= 1.0
