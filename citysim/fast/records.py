@@ -30,6 +30,9 @@ IOU_MATCH = 0.3
 #: (headlights, a flashlight) its beam on the ground reaches farther.
 NEAR_M = 3.0
 LIT_REACH_M = 20.0
+#: Half the width of a beam on the ground ahead of a road user out of view, m: dipped headlights
+#: light about the lane they drive in and the next (2 x 3.5 m lanes, plus the verge).
+BEAM_HALF_WIDTH_M = 4.0
 ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
                "hit", "det_class", "track_hit", "track_det_class")  # fmt: skip
 FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
@@ -156,8 +159,9 @@ class CalibrationRecorder(Collector):
 
     def _near_candidates(self, lamp_index: int, idx: np.ndarray, hits: dict[int, int], fa: list) -> list:
         """Unmatched target detections that stand on the ground near a candidate are that candidate's
-        (a walker's light spot, a car's beam on the road ahead of it): a hit, not a false alarm."""
-        if not fa or not len(idx):
+        (a walker's light spot, a car's beam on the road ahead of it): a hit, not a false alarm;
+        those in the beam of a road user out of view are nobody's false alarm either."""
+        if not fa or not self.agents:
             return fa
         cam = self.geometry.cameras[lamp_index]
         left = []
@@ -172,11 +176,29 @@ class CalibrationRecorder(Collector):
                     if agent.object_id not in hits and math.hypot(ground[0] - agent.x_m, ground[1] - agent.y_m) <= reach_m:
                         owner = agent
                         break
-            if owner is None:
-                left.append(d)
-            else:
+            if owner is not None:
                 hits[owner.object_id] = DETECTOR_CLASSES.index(d.cls)
+            elif not self._beam_from_out_of_view(ground):
+                left.append(d)
         return left
+
+    def _beam_from_out_of_view(self, ground_m: np.ndarray) -> bool:
+        """Whether a detection standing at ``ground_m`` lies in the beam of a road user who is not
+        the camera's candidate (a car behind the camera lighting the road ahead of it, or one beyond
+        the range coming toward it). Such a detection is that road user's, not a false alarm: fast
+        mode draws false alarms at random times, and counting beams among them would light lamps
+        at random instead of ahead of the car that throws them."""
+        if not np.all(np.isfinite(ground_m)):
+            return False
+        for a in self.agents:
+            if not a.light_on:
+                continue
+            dx, dy = ground_m[0] - a.x_m, ground_m[1] - a.y_m
+            ahead_m = dx * math.cos(a.heading_rad) + dy * math.sin(a.heading_rad)
+            across_m = -dx * math.sin(a.heading_rad) + dy * math.cos(a.heading_rad)
+            if 0.0 < ahead_m <= LIT_REACH_M and abs(across_m) <= BEAM_HALF_WIDTH_M:
+                return True
+        return False
 
     def _match(self, truth: Sequence, targets: Sequence) -> tuple[dict[int, int], list]:
         """Truth object id -> detected class index of its target detection; unmatched target detections."""

@@ -56,3 +56,21 @@ def test_boxes_projected_together_equal_boxes_projected_one_by_one():
     x, y, w, h = together[0]
     u, v = cam.project(np.array([[x0 + 6.0, -4.3, 0.0]]))[0]
     assert abs(x + w / 2 - u) <= 1.0 and abs(y + h - v) <= 1.0
+
+
+def test_a_beam_of_a_car_out_of_view_is_no_false_alarm_but_a_dark_spot_is():
+    street = build_street(scenario_from_mapping(tiny_scenario()))
+    geometry = CameraGeometry(street)
+    recorder = CalibrationRecorder(geometry, RecordingSensors(), 30.0)
+    cam = geometry.cameras[0]
+    x0 = float(cam.position_m[0])
+    behind = agent(2, x0 - 6.0, -1.6, "vehicle", light_on=True)  # behind the camera, headlights on
+    unlit = agent(3, x0 - 6.0, 1.6, "vehicle", light_on=False)
+    recorder.on_step(0.0, [behind, unlit], np.full(3, 0.2))
+    idx = np.flatnonzero(geometry.candidates([behind, unlit]).seen[:, 0])
+    assert len(idx) == 0  # neither car is the camera's candidate
+    beam = detection_at(cam, x0 + 10.0, -1.6)  # 16 m ahead of the lit car
+    stray = detection_at(cam, x0 + 18.0, 4.3)  # 24 m from either car
+    assert recorder._near_candidates(0, idx, {}, [beam, stray]) == [stray]
+    recorder.on_step(0.1, [unlit], np.full(3, 0.2))  # without headlights the same spot is a false alarm
+    assert recorder._near_candidates(0, idx, {}, [beam, stray]) == [beam, stray]
