@@ -23,12 +23,15 @@ def detection_at(cam, x_m: float, y_m: float) -> Detection:
     return Detection(box, np.array([0, 0, 0, 10.0, 0, 0]), "pedestrian", np.array([0.1, 0.9, 0, 0, 0]), 0.9, 1)
 
 
-def test_a_detection_on_the_ground_near_a_candidate_is_its_hit():
-    street = build_street(scenario_from_mapping(tiny_scenario()))
-    geometry = CameraGeometry(street)
-    recorder = CalibrationRecorder(geometry, RecordingSensors(), 30.0)
+def recorder_at_first_camera():
+    """A calibration recorder on the tiny street, its first camera, and that camera's x, m."""
+    geometry = CameraGeometry(build_street(scenario_from_mapping(tiny_scenario())))
     cam = geometry.cameras[0]
-    x0 = float(cam.position_m[0])
+    return geometry, CalibrationRecorder(geometry, RecordingSensors(), 30.0), cam, float(cam.position_m[0])
+
+
+def test_a_detection_on_the_ground_near_a_candidate_is_its_hit():
+    geometry, recorder, cam, x0 = recorder_at_first_camera()
     walker, car = agent(1, x0 + 12.0, -4.3), agent(2, x0 + 25.0, -1.6, "vehicle", light_on=True)
     recorder.on_step(0.0, [walker, car], np.full(3, 0.2))
     idx = np.flatnonzero(geometry.candidates([walker, car]).seen[:, 0])
@@ -43,10 +46,7 @@ def test_a_detection_on_the_ground_near_a_candidate_is_its_hit():
 
 def test_boxes_projected_together_equal_boxes_projected_one_by_one():
     # fast mode projects a camera's candidates in one call; a box must not depend on its company
-    street = build_street(scenario_from_mapping(tiny_scenario()))
-    geometry = CameraGeometry(street)
-    cam = geometry.cameras[0]
-    x0 = float(cam.position_m[0])
+    geometry, _, cam, x0 = recorder_at_first_camera()
     agents = [agent(1, x0 + 6.0, -4.3), agent(2, x0 + 25.0, -1.6, "vehicle"), agent(3, x0 - 3.0, 1.0),
               agent(4, x0 + 14.0, 2.2, "cyclist")]  # fmt: skip
     together = geometry.boxes_px(0, agents)
@@ -59,11 +59,7 @@ def test_boxes_projected_together_equal_boxes_projected_one_by_one():
 
 
 def test_a_beam_of_a_car_out_of_view_is_no_false_alarm_but_a_dark_spot_is():
-    street = build_street(scenario_from_mapping(tiny_scenario()))
-    geometry = CameraGeometry(street)
-    recorder = CalibrationRecorder(geometry, RecordingSensors(), 30.0)
-    cam = geometry.cameras[0]
-    x0 = float(cam.position_m[0])
+    geometry, recorder, cam, x0 = recorder_at_first_camera()
     behind = agent(2, x0 - 6.0, -1.6, "vehicle", light_on=True)  # behind the camera, headlights on
     unlit = agent(3, x0 - 6.0, 1.6, "vehicle", light_on=False)
     recorder.on_step(0.0, [behind, unlit], np.full(3, 0.2))
