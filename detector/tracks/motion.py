@@ -27,10 +27,16 @@ variation), stay under ``max_width_m`` and ``max_height_m`` (a car with its beam
 switching in the whole view) and have medians of at least ``min_width_m`` and ``min_height_m``
 (Table 1's smallest vehicle less the size tolerance: on the paper's scene replicas the pieces of
 cyclists and cars, 0.3-0.7 m wide, and low specks 0.6-0.9 m tall moving at 3-8 m/s were noise
-tracks this rule made targets, 27 of them, until these bounds and the 5 m/s floor). Such a track is a target even when it was rejected as 'size
-outside Table 1', 'classified noise' or 'erratic' (``OVERRIDDEN_REASONS``: 'erratic' because the
-acceleration test differentiates those same jumpy velocities; the fit is the stricter test of a
-steady motion); 'too few frames', 'too fast' and 'size unsteady' still reject. Its class
+tracks this rule made targets, 27 of them, until these bounds and the 5 m/s floor). The fitted velocity must not point at the camera (within
+``approach_deg``): a car coming toward the camera faces its headlamps at it, so the camera sees the
+car itself, and the spot on the road ahead of it is no second road user (on the paper's scene C
+such spots of cars still out of range were five of the noise tracks called target). Such a track
+is a target even when it was rejected as 'size outside Table 1', 'classified noise', 'erratic'
+(``OVERRIDDEN_REASONS``: 'erratic' because the acceleration test differentiates those same jumpy
+velocities; the fit is the stricter test of a steady motion) or, faster than ``vehicle_above_mps``
+only (``VEHICLE_ONLY_REASONS``), 'too wide for its heading': a car's spot going away is as wide as
+that, but a spot that wide at a cyclist's speed is a cyclist's lamp's light, not a car (scene C:
+four such tracks at 5-7 m/s). 'too few frames', 'too fast' and 'size unsteady' still reject. Its class
 (``motion_class``): a vehicle above ``vehicle_above_mps`` (faster than walkers and cyclists go in
 town), else its likeliest target class.
 
@@ -46,7 +52,9 @@ from detector.tracks.checks import require_int_at_least, require_positive
 from detector.tracks.track import Track, median
 
 #: The rejections a steady vehicle-like motion outweighs (see the module docstring).
-OVERRIDDEN_REASONS = frozenset({"size outside Table 1", "classified noise", "erratic"})
+OVERRIDDEN_REASONS = frozenset({"size outside Table 1", "classified noise", "erratic", "too wide for its heading"})
+#: Overridden only for a track at a vehicle's speed (above ``vehicle_above_mps``; module docstring).
+VEHICLE_ONLY_REASONS = frozenset({"too wide for its heading"})
 
 
 @dataclass(frozen=True)
@@ -68,12 +76,17 @@ class MotionLimits:
     max_width_m: float = 12.0
     max_height_m: float = 5.0
     vehicle_above_mps: float = 8.5
+    #: a fitted velocity within this of straight at the camera is a car coming: its headlamps face
+    #: the camera, which sees them; its spot on the road ahead is no evidence of a second road user
+    approach_deg: float = 60.0
 
     def __post_init__(self) -> None:
         require_int_at_least(self, ("min_points",), 3)
         require_positive(self, ("window_s", "min_age_s", "min_speed_mps", "max_speed_mps", "max_residual_share",
                                 "max_size_variation", "min_width_m", "min_height_m", "max_width_m", "max_height_m",
-                                "vehicle_above_mps"))  # fmt: skip
+                                "vehicle_above_mps", "approach_deg"))  # fmt: skip
+        if not self.approach_deg < 180.0:
+            raise ValueError(f"MotionLimits.approach_deg: must be < 180, got {self.approach_deg!r}")
         if not self.min_speed_mps < self.max_speed_mps:
             raise ValueError(f"MotionLimits: need min_speed_mps < max_speed_mps, got {self.min_speed_mps!r} "
                              f"and {self.max_speed_mps!r}")  # fmt: skip
@@ -117,6 +130,17 @@ def steady_speed_mps(track: Track, limits: MotionLimits) -> float | None:
     return speed_mps if reason is None else None
 
 
+def overriding_speed_mps(track: Track, reason: str, limits: MotionLimits) -> float | None:
+    """The fitted speed, m/s, if ``track``'s motion outweighs its rejection for ``reason`` (a reason of
+    ``OVERRIDDEN_REASONS``; for ``VEHICLE_ONLY_REASONS`` only above ``vehicle_above_mps``); else None."""
+    if reason not in OVERRIDDEN_REASONS:
+        return None
+    speed_mps = steady_speed_mps(track, limits)
+    if speed_mps is None or (reason in VEHICLE_ONLY_REASONS and speed_mps <= limits.vehicle_above_mps):
+        return None
+    return speed_mps
+
+
 def unsteady_because(track: Track, limits: MotionLimits) -> str | None:
     """Why ``track`` did not move like a road vehicle (None: it did), for diagnosis."""
     return _judge(track, limits)[0]
@@ -133,6 +157,12 @@ def _judge(track: Track, limits: MotionLimits) -> tuple[str | None, float]:
     speed_mps = math.hypot(vf, vr)
     if not limits.min_speed_mps <= speed_mps <= limits.max_speed_mps:
         return "speed out of range", speed_mps
+    right_m = sum(p[2] for p in points) / len(points)
+    reach_m = math.hypot(forward_m, right_m)
+    # cosine between the velocity and the way back to the pole foot: 1 = straight at the camera
+    towards = -(vf * forward_m + vr * right_m) / (speed_mps * reach_m) if reach_m > 0 else 0.0
+    if towards > math.cos(math.radians(limits.approach_deg)):
+        return "coming toward the camera", speed_mps
     if residual_m > limits.max_residual_share * max(forward_m, 1.0):
         return "not a straight steady path", speed_mps
     widths, heights = track.widths_m, track.heights_m

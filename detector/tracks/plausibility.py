@@ -6,7 +6,9 @@ but its track can: seen through the camera model an insect near the lens jumps m
 ground from frame to frame, changes size as it flutters and rarely lasts. The rules, each a
 reason (checked in this order, the first that holds is given):
 
-* ``too few frames``: seen in fewer than ``min_frames`` frames (rain streaks, flickers);
+* ``too few frames``: seen in fewer than ``min_frames`` frames (rain streaks, flickers), or its
+  ground velocity not yet known (positions spanning half of ``VELOCITY_WINDOW_S``: 0.27 s at 15
+  frames/s; the rules below need it);
 * ``too fast``: ground speed above ``max_speed_mps`` (60 km/h, the fastest road user here,
   plus a margin for the estimate's noise);
 * ``erratic``: the ground velocity changed faster than ``max_accel_mps2`` in at least
@@ -18,6 +20,17 @@ reason (checked in this order, the first that holds is given):
 * ``size unsteady``: the estimated height varies more than ``max_height_variation``
   (coefficient of variation over the last frames): a body keeps its height, an insect or a
   flickering light does not;
+* ``too wide for its heading``: faster than walkers go (``walk_max_mps``) and along the line of
+  sight (within ``head_on_deg`` of it), so the camera sees the road user's front or back; Table 1's
+  road users that go that fast (cyclists, vehicles) show at most 1.8 m of width on at least 1.4 m
+  of height there (``FRONT_ASPECT``: 1.29), and the track's median estimated width / median height
+  is above that, widened by ``size_tolerance`` (the height may be that much under its range:
+  1.29 / 0.65 = 1.98). What is that wide and moves so is the light a cyclist's lamp or a car's
+  headlights throw on the road ahead (3.5-9.5 m wide, 1.6-3.3 m 'tall' as a standing body on the
+  paper's scene C; its frames are often classified target: a car side on is as wide). Judged over
+  the track's life (``note_heading`` counts the frames): too wide in most of the frames it moved
+  so, since a spot's outline breathes around the bound and its speed dips under it for a frame;
+  a track stays the thing it was;
 * ``oscillating in place``: over ``SWAY_FRAMES`` frames the box centre swung across a good
   share of its width yet ended where it began, while the ground velocity stays under
   ``still_mps``: a swaying branch or flag. A walker standing still hardly moves at all.
@@ -27,6 +40,7 @@ Speeds are m/s on the ground, sizes m (``detector.features``), frames counted at
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from detector.classes import TABLE1
@@ -43,6 +57,19 @@ def apparent_size_ranges_m() -> dict[str, tuple[tuple[float, float], tuple[float
 
 
 APPARENT_SIZES_M = apparent_size_ranges_m()
+
+#: Classes a road user moving faster than walkers can be (groups and pedestrians walk; a jogger
+#: is a pedestrian no wider than a walker).
+FAST_CLASSES = ("cyclist", "vehicle")
+
+
+def front_aspect() -> float:
+    """The largest width / height (Table 1: widest over lowest) a cyclist or vehicle shows from the
+    front or back: a vehicle's 1.8 m over 1.4 m, 1.29."""
+    return max(TABLE1[c].width_m[1] / TABLE1[c].height_m[0] for c in FAST_CLASSES)
+
+
+FRONT_ASPECT = front_aspect()
 
 
 def _outside(value: float, lo: float, hi: float) -> float:
@@ -70,13 +97,24 @@ class PlausibilityLimits:
     size_tolerance: float = 0.35
     max_height_variation: float = 0.35
     still_mps: float = 0.5
+    #: walkers, groups and joggers stay under this (citysim's walkers 1.0-1.8 m/s, runners to 4 m/s,
+    #: but a runner is a pedestrian: narrow); above it a track is a cyclist or a vehicle
+    walk_max_mps: float = 2.5
+    #: within this of the line of sight a body shows the camera its front or back (cos 25 deg = 0.91:
+    #: a car's 4.6 m length then adds at most 1.9 m to its width)
+    head_on_deg: float = 25.0
     min_sway_share: float = 0.3  # of the box width
     max_sway_drift_share: float = 0.3  # of the swing
 
     def __post_init__(self) -> None:
         require_int_at_least(self, ("min_frames", "max_accel_violations"), 1)
         require_positive(self, ("max_speed_mps", "max_accel_mps2", "size_tolerance", "max_height_variation",
-                                "still_mps", "min_sway_share", "max_sway_drift_share"))  # fmt: skip
+                                "still_mps", "walk_max_mps", "head_on_deg", "min_sway_share",
+                                "max_sway_drift_share"))  # fmt: skip
+        if not self.size_tolerance < 1.0:
+            raise ValueError(f"PlausibilityLimits.size_tolerance: must be < 1, got {self.size_tolerance!r}")
+        if not self.head_on_deg < 90.0:
+            raise ValueError(f"PlausibilityLimits.head_on_deg: must be < 90, got {self.head_on_deg!r}")
 
 
 def note_acceleration(track: Track, limits: PlausibilityLimits) -> None:
@@ -89,9 +127,23 @@ def note_acceleration(track: Track, limits: PlausibilityLimits) -> None:
     track.accel_violations.append(accel is not None and accel > limits.max_accel_mps2)
 
 
+def note_heading(track: Track, limits: PlausibilityLimits) -> None:
+    """Count this frame for 'too wide for its heading' (call once per observed frame)."""
+    speed = track.speed_mps
+    if speed is None or speed <= limits.walk_max_mps:
+        return
+    cos = heading_cos(track)
+    if cos is None or abs(cos) < math.cos(math.radians(limits.head_on_deg)):
+        return
+    track.head_on_frames += 1
+    height_m = median(track.heights_m)
+    if height_m <= 0.0 or median(track.widths_m) / height_m > FRONT_ASPECT / (1.0 - limits.size_tolerance):
+        track.wide_frames += 1
+
+
 def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     """Why no road user could have made ``track`` (None: one could)."""
-    if track.sightings < limits.min_frames:
+    if track.sightings < limits.min_frames or track.velocity_mps is None:
         return "too few frames"
     speed = track.speed_mps
     if speed is not None and speed > limits.max_speed_mps:
@@ -107,9 +159,22 @@ def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
         variance = sum((h - mean_m) ** 2 for h in heights) / n
         if mean_m <= 0 or variance > (limits.max_height_variation * mean_m) ** 2:
             return "size unsteady"
+    if 2 * track.wide_frames > track.head_on_frames > 0:
+        return "too wide for its heading"
     if _sways(track, limits):
         return "oscillating in place"
     return None
+
+
+def heading_cos(track: Track) -> float | None:
+    """Cosine between the track's ground velocity and the line of sight from the pole foot (1: going
+    straight away, -1: coming straight at the camera); None while either is unknown."""
+    speed = track.speed_mps
+    reach_m = math.hypot(track.forward_m, track.right_m)
+    if speed is None or speed <= 0.0 or reach_m <= 0.0:
+        return None
+    vf, vr = track.velocity_mps
+    return (vf * track.forward_m + vr * track.right_m) / (speed * reach_m)
 
 
 def _sways(track: Track, limits: PlausibilityLimits) -> bool:

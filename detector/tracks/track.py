@@ -133,6 +133,10 @@ class Track:
     window_log_sums: list[float] = field(default_factory=list)
     #: frames (within the acceleration window) whose acceleration exceeded the bound
     accel_violations: deque = field(default_factory=lambda: deque(maxlen=ACCEL_FRAMES))
+    #: frames judged moving faster than walkers along the line of sight, and of those the frames
+    #: too wide for it (``detector.tracks.plausibility.note_heading``)
+    head_on_frames: int = 0
+    wide_frames: int = 0
     #: the last n target decisions as bits, newest in bit 0 (k-of-n confirmation)
     hit_bits: int = 0
     target: bool = False

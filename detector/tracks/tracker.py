@@ -9,9 +9,10 @@ classifier:
 2. ``update(prepared, probabilities)``: every track continued or started, its pooled class
    and p_target (``track.pool_probabilities``), its plausibility (``plausibility``) and its
    target decision: a target track is plausible and its pooled p_target reaches the
-   threshold, or it moves like a road vehicle (``motion``: straight, steady, 5-20 m/s, a steady
-   size), which outweighs frames of noise or of no Table 1 size (a car's headlight spot going
-   away from the camera). Returns one ``TrackView`` per region.
+   threshold, or it moves like a road vehicle (``motion``: straight, steady, 5-20 m/s, not
+   coming toward the camera, a steady size), which outweighs frames of noise or of no Table 1
+   size (a car's headlight spot going away from the camera) and, at a vehicle's speed, a width
+   no road user shows moving that way. Returns one ``TrackView`` per region.
 
 Tracks unseen for more than ``max_missed_frames`` frames end, except a target that had
 stopped (ground speed under the plausibility limits' ``still_mps``): background subtraction
@@ -32,8 +33,13 @@ from detector.camera import CameraModel
 from detector.features import RegionGeometry
 from detector.tracks.associate import Gates, associate
 from detector.tracks.ground import GroundProjector
-from detector.tracks.motion import OVERRIDDEN_REASONS, MotionLimits, motion_class, steady_speed_mps
-from detector.tracks.plausibility import PlausibilityLimits, note_acceleration, reject_reason
+from detector.tracks.motion import MotionLimits, motion_class, overriding_speed_mps
+from detector.tracks.plausibility import (
+    PlausibilityLimits,
+    note_acceleration,
+    note_heading,
+    reject_reason,
+)
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
 from detector.tracks.track import POOLINGS, Track
 
@@ -234,6 +240,7 @@ class TrackSet:
 
     def _judge(self, track: Track) -> None:
         note_acceleration(track, self.limits)
+        note_heading(track, self.limits)
         speed = track.speed_mps
         if speed is not None and speed < self.limits.still_mps:
             track.still_frame = track.last_frame
@@ -246,8 +253,8 @@ class TrackSet:
         if reason is None and track.p_target < self.target_threshold:
             reason = "classified noise"
         # a steady vehicle's motion outweighs frames that look like noise (a car's headlight spot)
-        if reason in OVERRIDDEN_REASONS:
-            speed_mps = steady_speed_mps(track, self.motion)
+        if reason is not None:
+            speed_mps = overriding_speed_mps(track, reason, self.motion)
             if speed_mps is not None:
                 reason = None
                 track.cls = motion_class(speed_mps, track.cls, self.motion)

@@ -43,8 +43,11 @@ PAPER = {
 TRACK_NOTES = (
     "The detector follows each object across frames (`detector.tracks`) and decides per track: "
     "a track is a target when a road user could have made it (speed, acceleration, size steady "
-    "within Table 1, a few frames seen) and its class probabilities pooled over its last 15 "
-    "frames say target. *frames*: the 'objects' rows above, decided by the detection's track. "
+    "within Table 1, no wider than a cyclist's or a car's front or back when it goes faster than "
+    "walkers along the line of sight, a few frames seen and its motion known) and its class "
+    "probabilities pooled over its last 15 frames say target, or when it moves like a vehicle "
+    "going away (straight, steady, 5-20 m/s: a car seen from behind, often only its headlight "
+    "spot). *frames*: the 'objects' rows above, decided by the detection's track. "
     f"*objects*: targets eligible in at least {MIN_OBJECT_FRAMES} frames; *missed*: no detection "
     "matched to it was a target in any of them. *noise tracks*: tracks whose detections mostly "
     "match no target; *called target*: a target in at least one frame; *clean* leaves out noise "
