@@ -58,7 +58,7 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 5
+MODEL_VERSION = 6
 #: The record columns (``citysim.fast.records``) the track-level fit reads in place of the frame-level ones.
 TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "fa": "track_fa",
                  "fa_distance_m": "track_fa_distance_m", "fa_box": "track_fa_box", "fa_class": "track_fa_class"}
