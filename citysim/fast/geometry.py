@@ -29,6 +29,24 @@ BEARING_MARGIN_RAD = math.radians(5.0)
 #: The wider view that keeps a camera judged every frame (as ``CameraSchedule``'s margin does).
 WAKE_RANGE_M = 40.0
 WAKE_MARGIN_RAD = math.radians(15.0)
+#: Where a road user carrying a light throws it, m ahead of its footprint along its heading: the
+#: middle of a dipped beam's 0-20 m on the road (``citysim.fast.records.LIT_REACH_M``).
+BEAM_AHEAD_M = 10.0
+#: The patch of road a beam lights, as the real detector outlines it (m): a car's spot was 5.5-9 m
+#: wide and 2.3-4 m 'tall' at its bottom row; a drawn beam detection is given a box this size.
+BEAM_WIDTH_M, BEAM_HEIGHT_M = 6.0, 2.5
+#: Added to a road user's object id to name its beam (in calibration rows and fast mode's draws).
+BEAM_ID_OFFSET = 1_000_000_000
+
+
+def beam_id(object_id: int) -> int:
+    """The id of the beam of road user ``object_id``: never an agent's own."""
+    return BEAM_ID_OFFSET + object_id
+
+
+def beam_x_m(agent: AgentState) -> float:
+    """Where along the street the middle of ``agent``'s beam lies, m."""
+    return agent.x_m + BEAM_AHEAD_M * math.cos(agent.heading_rad)
 
 
 @dataclass(frozen=True)
@@ -39,6 +57,12 @@ class Candidates:
     bearing_rad: np.ndarray  # (A, C)
     seen: np.ndarray  # (A, C) bool: a candidate of that camera
     awake: np.ndarray  # (C,) bool: something within the wider wake view
+    #: (A, C) bool: a *beam candidate*: a road user carrying a light, not itself a candidate of that
+    #: camera, whose beam's middle (``BEAM_AHEAD_M`` ahead) is in the camera's view; the beam's
+    #: forward distance and bearing from that camera
+    beam_seen: np.ndarray
+    beam_forward_m: np.ndarray
+    beam_bearing_rad: np.ndarray
 
 
 class CameraGeometry:
@@ -58,21 +82,44 @@ class CameraGeometry:
 
     def candidates(self, agents: Sequence[AgentState]) -> Candidates:
         xy = np.array([[a.x_m, a.y_m] for a in agents], dtype=np.float64).reshape(-1, 2)
-        dx = xy[:, None, 0] - self.pole_xy_m[None, :, 0]
-        dy = xy[:, None, 1] - self.pole_xy_m[None, :, 1]
-        hx, hy = self.heading_xy[:, 0], self.heading_xy[:, 1]
-        forward = dx * hx + dy * hy
-        lateral = -dx * hy + dy * hx
-        bearing = np.arctan2(lateral, forward)
+        forward, bearing = self._view(xy)
         off = np.abs(bearing)
         seen = (forward > 0.0) & (forward <= CANDIDATE_RANGE_M) & (off <= self.half_fov_rad + BEARING_MARGIN_RAD)
         wake = (forward > 0.0) & (forward <= WAKE_RANGE_M) & (off <= self.half_fov_rad + WAKE_MARGIN_RAD)
-        return Candidates(forward, bearing, seen, wake.any(axis=0) if len(xy) else np.zeros(self.n, bool))
+        lit = np.array([a.light_on for a in agents], dtype=bool)
+        if lit.any():
+            heading = np.array([a.heading_rad for a in agents], dtype=np.float64)
+            beam_xy = xy + BEAM_AHEAD_M * np.column_stack([np.cos(heading), np.sin(heading)])
+            beam_forward, beam_bearing = self._view(beam_xy)
+            beam_seen = (lit[:, None] & ~seen & (beam_forward > 0.0) & (beam_forward <= CANDIDATE_RANGE_M)
+                         & (np.abs(beam_bearing) <= self.half_fov_rad + BEARING_MARGIN_RAD))  # fmt: skip
+        else:
+            beam_forward, beam_bearing, beam_seen = forward, bearing, np.zeros_like(seen)
+        return Candidates(forward, bearing, seen, wake.any(axis=0) if len(xy) else np.zeros(self.n, bool),
+                          beam_seen, beam_forward, beam_bearing)  # fmt: skip
+
+    def _view(self, xy_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(A, C) forward ground distance (m) and bearing (rad) of ground points from every camera."""
+        dx = xy_m[:, None, 0] - self.pole_xy_m[None, :, 0]
+        dy = xy_m[:, None, 1] - self.pole_xy_m[None, :, 1]
+        hx, hy = self.heading_xy[:, 0], self.heading_xy[:, 1]
+        forward = dx * hx + dy * hy
+        lateral = -dx * hy + dy * hx
+        return forward, np.arctan2(lateral, forward)
 
     def light_at(self, x_m: np.ndarray, levels: np.ndarray) -> np.ndarray:
         """The level (0..1) of the lamp nearest along the street to each ``x_m``."""
         nearest = np.abs(np.asarray(x_m, dtype=np.float64)[:, None] - self.lamp_x_m[None, :]).argmin(axis=1)
         return np.asarray(levels, dtype=np.float64)[nearest]
+
+    def beam_box_px(self, lamp_index: int, agent: AgentState) -> tuple[int, int, int, int]:
+        """The box of the patch ``agent``'s light throws ``BEAM_AHEAD_M`` ahead of it, in camera
+        ``lamp_index``'s frame (px; as ``box_px``, standing on the patch's middle)."""
+        x_m = agent.x_m + BEAM_AHEAD_M * math.cos(agent.heading_rad)
+        y_m = agent.y_m + BEAM_AHEAD_M * math.sin(agent.heading_rad)
+        spot = AgentState(agent.object_id, agent.cls, x_m, y_m, agent.heading_rad, agent.speed_mps, BEAM_WIDTH_M,
+                          BEAM_WIDTH_M, BEAM_HEIGHT_M)  # fmt: skip
+        return self.boxes_px(lamp_index, [spot])[0]
 
     def box_px(self, lamp_index: int, agent: AgentState) -> tuple[int, int, int, int]:
         """An OpenCV (x, y, w, h) box of ``agent`` in camera ``lamp_index``'s distorted frame, px:

@@ -41,7 +41,13 @@ import numpy as np
 
 from citysim.config.kinds import AGENT_KINDS, DETECTOR_CLASSES
 
-KINDS = tuple(AGENT_KINDS)
+#: The pseudo-kind of a *beam candidate* (``citysim.fast.geometry``): the light a road user out of
+#: a camera's view throws into it. Its own rows in every table: the real detector reports such a
+#: patch of lit road as often as it does, and fast mode draws it where the light is.
+BEAM = "beam"
+KINDS = (*AGENT_KINDS, BEAM)
+#: The detector class a beam's hits are given before calibration has seen any (the prior).
+BEAM_PRIOR_CLASS = "vehicle"
 #: Bin edges; a value falls in bin i when edges[i] <= value < edges[i + 1] (the last bin is open).
 DISTANCE_EDGES_M = (0.0, 5.0, 8.0, 11.0, 14.0, 17.0, 20.0, 23.0, 26.0)
 BEARING_EDGES_DEG = (0.0, 10.0, 20.0, 30.0)
@@ -58,7 +64,7 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 6
+MODEL_VERSION = 7
 #: The record columns (``citysim.fast.records``) the track-level fit reads in place of the frame-level ones.
 TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "fa": "track_fa",
                  "fa_distance_m": "track_fa_distance_m", "fa_box": "track_fa_box", "fa_class": "track_fa_class"}
@@ -161,7 +167,8 @@ def fit_p_hit(cells: tuple[np.ndarray, ...], hit: np.ndarray) -> np.ndarray:
     n = np.zeros(shape)
     np.add.at(hits, cells, hit.astype(np.float64))
     np.add.at(n, cells, 1.0)
-    target = np.array([AGENT_KINDS[k].is_target for k in KINDS])
+    # a beam is no road user: unseen, it falls back to the non-targets' pooled rate
+    target = np.array([k in AGENT_KINDS and AGENT_KINDS[k].is_target for k in KINDS])
     # a kind never seen in calibration falls back to the pooled rate of its group (targets or not)
     pooled = np.zeros(len(KINDS))
     for group in (True, False):
@@ -196,7 +203,8 @@ def fit_classes(rows: dict[str, np.ndarray]) -> dict[str, list[float]]:
     out = {}
     for k, name in enumerate(KINDS):
         counts = np.full(len(DETECTOR_CLASSES), 0.0)
-        counts[DETECTOR_CLASSES.index(AGENT_KINDS[name].detector_class)] += 0.5  # its own class, as a prior
+        prior = AGENT_KINDS[name].detector_class if name in AGENT_KINDS else BEAM_PRIOR_CLASS
+        counts[DETECTOR_CLASSES.index(prior)] += 0.5  # its own class, as a prior
         sel = (rows["kind"] == k) & rows["hit"].astype(bool) & (rows["det_class"] >= 0)
         np.add.at(counts, rows["det_class"][sel], 1.0)
         out[name] = (counts / counts.sum()).tolist()

@@ -18,8 +18,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
-from citysim.fast.geometry import CameraGeometry
-from citysim.fast.model import KINDS, YOUNG_FRAMES, background_age_bin
+from citysim.fast.geometry import CameraGeometry, beam_id, beam_x_m
+from citysim.fast.model import BEAM, KINDS, YOUNG_FRAMES, background_age_bin
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.world.agents import AgentState
@@ -148,6 +148,7 @@ class CalibrationRecorder(Collector):
                                                 track_class >= 0, track_class),
                                   strict=True):  # fmt: skip
                 self.rows[col].append(value)
+        self._beam_rows(lamp_index, frame, cand, young, hits, track_hits)
         near = idx[np.argmin(cand.forward_m[idx, lamp_index])] if len(idx) else -1
         values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, *_fa_values(fa),
                   len(recorded.inner.last_regions) > 0,
@@ -178,18 +179,22 @@ class CalibrationRecorder(Collector):
                         break
             if owner is not None:
                 hits[owner.object_id] = DETECTOR_CLASSES.index(d.cls)
-            elif not self._beam_from_out_of_view(ground):
+                continue
+            lighter = self._beam_owner(ground)
+            if lighter is None:
                 left.append(d)
+            elif lighter.object_id not in hits:  # a candidate's second patch of light is just that
+                hits.setdefault(beam_id(lighter.object_id), DETECTOR_CLASSES.index(d.cls))
         return left
 
-    def _beam_from_out_of_view(self, ground_m: np.ndarray) -> bool:
-        """Whether a detection standing at ``ground_m`` lies in the beam of a road user who is not
-        the camera's candidate (a car behind the camera lighting the road ahead of it, or one beyond
-        the range coming toward it). Such a detection is that road user's, not a false alarm: fast
-        mode draws false alarms at random times, and counting beams among them would light lamps
-        at random instead of ahead of the car that throws them."""
+    def _beam_owner(self, ground_m: np.ndarray) -> AgentState | None:
+        """The road user carrying a light whose beam a detection standing at ``ground_m`` lies in (up to
+        ``LIT_REACH_M`` ahead of it, ``BEAM_HALF_WIDTH_M`` either side), if any. A candidate's beam
+        is its own (``_near_candidates``); a beam of a road user out of view (a car behind the camera
+        lighting the road ahead of it) is that road user's *beam candidate*'s hit, not a false alarm:
+        fast mode draws false alarms at random times, beams where the light is."""
         if not np.all(np.isfinite(ground_m)):
-            return False
+            return None
         for a in self.agents:
             if not a.light_on:
                 continue
@@ -197,8 +202,24 @@ class CalibrationRecorder(Collector):
             ahead_m = dx * math.cos(a.heading_rad) + dy * math.sin(a.heading_rad)
             across_m = -dx * math.sin(a.heading_rad) + dy * math.cos(a.heading_rad)
             if 0.0 < ahead_m <= LIT_REACH_M and abs(across_m) <= BEAM_HALF_WIDTH_M:
-                return True
-        return False
+                return a
+        return None
+
+    def _beam_rows(self, lamp_index: int, frame: int, cand, young: bool, hits: dict, track_hits: dict) -> None:
+        """One row per beam candidate of the camera (kind ``BEAM``, at its beam's middle)."""
+        if not len(self.agents):
+            return
+        for a_i in np.flatnonzero(cand.beam_seen[:, lamp_index]).tolist():
+            agent = self.agents[a_i]
+            key = beam_id(agent.object_id)
+            det_class, track_class = hits.get(key, -1), track_hits.get(key, -1)
+            light = float(self.geometry.light_at(np.array([beam_x_m(agent)]), self.levels)[0])
+            for col, value in zip(ROW_COLUMNS, (lamp_index, frame, key, KINDS.index(BEAM),
+                                                cand.beam_forward_m[a_i, lamp_index],
+                                                cand.beam_bearing_rad[a_i, lamp_index], agent.speed_mps, light,
+                                                young, det_class >= 0, det_class, track_class >= 0, track_class),
+                                  strict=True):  # fmt: skip
+                self.rows[col].append(value)
 
     def _match(self, truth: Sequence, targets: Sequence) -> tuple[dict[int, int], list]:
         """Truth object id -> detected class index of its target detection; unmatched target detections."""

@@ -20,8 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
-from citysim.fast.geometry import CameraGeometry
+from citysim.fast.geometry import CameraGeometry, beam_id, beam_x_m
 from citysim.fast.model import (
+    BEAM,
     KINDS,
     LIT_LEVEL,
     SensorModel,
@@ -124,6 +125,12 @@ class FastSensors:
             idx = self._of_camera[lamp_index] = np.flatnonzero(self.cand.seen[:, lamp_index])
         return idx
 
+    def beams_of(self, lamp_index: int) -> np.ndarray:
+        """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
+        if not self.agents:
+            return _NO_INDICES
+        return np.flatnonzero(self.cand.beam_seen[:, lamp_index])
+
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
         """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
 
@@ -223,10 +230,13 @@ class SensedDetector:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
         idx = s.candidates_of(i)
         detections = self._candidates(idx, k, is_young(learning_rate)) if len(idx) else []
+        beams = s.beams_of(i)
+        if len(beams):
+            detections += self._beams(beams, k, is_young(learning_rate))
         fa = self._false_alarm(k)
         if fa is not None:
             detections.append(fa)
-        busy = len(idx) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]
+        busy = len(idx) > 0 or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]
         self.last_regions = (True,) if busy else ()
         return detections
 
@@ -253,6 +263,30 @@ class SensedDetector:
                 out.append(_detection(s.box_px(i, int(idx[n])), float(fwd[n]), cls, a.object_id))
         if len(self.previous) > 512:
             self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
+        return out
+
+    def _beams(self, idx: np.ndarray, k: int, young: bool) -> list[Detection]:
+        """Draws for the beams of road users out of view (kind ``BEAM``, each its own chain and
+        track), reported where the light is: the patch at the beam's middle."""
+        s, i, kind = self.sensors, self.lamp_index, KINDS.index(BEAM)
+        agents = [s.agents[j] for j in idx.tolist()]
+        fwd = s.cand.beam_forward_m[idx, i]
+        light = s.geometry.light_at(np.array([beam_x_m(a) for a in agents]), s.levels)
+        cells = cell_of(np.full(len(agents), kind), fwd, s.cand.beam_bearing_rad[idx, i], light,
+                        np.full(len(agents), young), np.array([a.speed_mps for a in agents]))  # fmt: skip
+        p, rho = s.p_hit[cells], float(s.persistence[kind])
+        out = []
+        for n, a in enumerate(agents):
+            key = beam_id(a.object_id)
+            prev = self.previous.get(key)
+            if prev is not None and prev[0] == k - 1:
+                p[n] = p[n] + rho * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho)
+            hit = bool(self.rng.random() < p[n])
+            self.previous[key] = (k, hit)
+            self.tracker.update(k, key, hit)
+            if hit:
+                cls = DETECTOR_CLASSES[int(np.searchsorted(s.class_cdf[BEAM], self.rng.random(), side="right"))]
+                out.append(_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), cls, key))
         return out
 
     def _false_alarm(self, k: int) -> Detection | None:

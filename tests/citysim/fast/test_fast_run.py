@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from citysim.config.scenario import ControllerSpec, scenario_from_mapping
+from citysim.fast.model import BEAM, KINDS
 from citysim.sim.loop import RunError, run_controller
 from tests.citysim.fast.synthetic import constant_model, tiny_scenario
 
@@ -95,3 +97,20 @@ def test_fast_without_a_model_and_an_unknown_fidelity_are_errors(scenario):
         run_controller(scenario, ControllerSpec(name="detector"), fidelity="fast")
     with pytest.raises(RunError, match="fidelity: unknown 'quick'; valid: full, fast"):
         run_controller(scenario, ControllerSpec(name="detector"), fidelity="quick")
+
+
+def test_a_car_out_of_view_lights_the_zone_its_beam_reaches_only_when_beams_are_detected():
+    # one car with headlights, scripted along the street: before the first camera sees the car,
+    # its beam is in view; a model that detects beams (and nothing else) lights lamps for it
+    car = {"traffic": {"classes": {}, "scripted": [{"cls": "vehicle", "t_s": 0.0, "direction": 1,
+                                                    "speed_kmh": 29.0, "light_on": True}]}}  # fmt: skip
+    scenario = scenario_from_mapping(tiny_scenario(**car))
+    beams_only = constant_model(0.0)
+    p = np.array(beams_only.p_hit)
+    p[KINDS.index(BEAM)] = 1.0
+    beams_only.p_hit = p.tolist()
+    beams_only.track = {**beams_only.track, "p_hit": beams_only.p_hit}
+    seen = fast(scenario, "detector_confirmed", beams_only)
+    blind = fast(scenario, "detector_confirmed", constant_model(0.0))
+    assert triggers(blind) == 0 and triggers(seen) > 0
+    assert seen["detection"]["tp"] == 0  # a beam is nobody's truth box

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from citysim.config.kinds import DETECTOR_CLASSES
 from citysim.config.scenario import scenario_from_mapping
-from citysim.fast.geometry import CameraGeometry
+from citysim.fast.geometry import BEAM_AHEAD_M, CameraGeometry, beam_id
 from citysim.fast.records import CalibrationRecorder, RecordingSensors
 from citysim.world.agents import AgentState
 from citysim.world.street import build_street
@@ -67,6 +69,24 @@ def test_a_beam_of_a_car_out_of_view_is_no_false_alarm_but_a_dark_spot_is():
     assert len(idx) == 0  # neither car is the camera's candidate
     beam = detection_at(cam, x0 + 10.0, -1.6)  # 16 m ahead of the lit car
     stray = detection_at(cam, x0 + 18.0, 4.3)  # 24 m from either car
-    assert recorder._near_candidates(0, idx, {}, [beam, stray]) == [stray]
+    hits: dict[int, int] = {}
+    assert recorder._near_candidates(0, idx, hits, [beam, stray]) == [stray]
+    assert hits == {beam_id(2): DETECTOR_CLASSES.index("pedestrian")}  # the lit car's beam candidate's hit
     recorder.on_step(0.1, [unlit], np.full(3, 0.2))  # without headlights the same spot is a false alarm
     assert recorder._near_candidates(0, idx, {}, [beam, stray]) == [beam, stray]
+
+
+def test_a_lit_road_user_behind_the_camera_is_a_beam_candidate_standing_where_its_light_is():
+    geometry, _, cam, x0 = recorder_at_first_camera()
+    # just behind the pole (the camera looks 8 degrees off the street's +x, across to the far lane)
+    lit, unlit = agent(1, x0 - 2.0, -1.6, "vehicle", light_on=True), agent(2, x0 - 2.0, -1.6, "vehicle")
+    far_back = agent(3, x0 - 40.0, -1.6, "vehicle", light_on=True)  # its light ends before the view
+    cand = geometry.candidates([lit, unlit, far_back])
+    assert not cand.seen[:, 0].any()
+    assert cand.beam_seen[:, 0].tolist() == [True, False, False]
+    assert cand.beam_forward_m[0, 0] == pytest.approx(cand.forward_m[0, 0] + BEAM_AHEAD_M, abs=0.2)
+    x, y, w, h = geometry.beam_box_px(0, lit)  # stands on the beam's middle, 10 m ahead of the car
+    u, v = cam.project(np.array([[x0 - 2.0 + BEAM_AHEAD_M, -1.6, 0.0]]))[0]
+    assert abs(x + w / 2 - u) <= 1.0 and abs(y + h - v) <= 1.0
+    seen_car = geometry.candidates([agent(4, x0 + 12.0, -1.6, "vehicle", light_on=True)])
+    assert seen_car.seen[0, 0] and not seen_car.beam_seen[0, 0]  # a candidate's light is its own
