@@ -112,11 +112,11 @@ class CameraGeometry:
         nearest = np.abs(np.asarray(x_m, dtype=np.float64)[:, None] - self.lamp_x_m[None, :]).argmin(axis=1)
         return np.asarray(levels, dtype=np.float64)[nearest]
 
-    def beam_box_px(self, lamp_index: int, agent: AgentState) -> tuple[int, int, int, int]:
-        """The box of the patch ``agent``'s light throws ``BEAM_AHEAD_M`` ahead of it, in camera
+    def beam_box_px(self, lamp_index: int, agent: AgentState, ahead_m: float = BEAM_AHEAD_M) -> tuple[int, int, int, int]:
+        """The box of the patch ``agent``'s light throws ``ahead_m`` ahead of it, in camera
         ``lamp_index``'s frame (px; as ``box_px``, standing on the patch's middle)."""
-        x_m = agent.x_m + BEAM_AHEAD_M * math.cos(agent.heading_rad)
-        y_m = agent.y_m + BEAM_AHEAD_M * math.sin(agent.heading_rad)
+        x_m = agent.x_m + ahead_m * math.cos(agent.heading_rad)
+        y_m = agent.y_m + ahead_m * math.sin(agent.heading_rad)
         spot = AgentState(agent.object_id, agent.cls, x_m, y_m, agent.heading_rad, agent.speed_mps, BEAM_WIDTH_M,
                           BEAM_WIDTH_M, BEAM_HEIGHT_M)  # fmt: skip
         return self.boxes_px(lamp_index, [spot])[0]

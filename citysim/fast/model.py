@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import bisect
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -64,12 +64,12 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 7
+MODEL_VERSION = 8
 #: The record columns (``citysim.fast.records``) the track-level fit reads in place of the frame-level ones.
-TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "fa": "track_fa",
+TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "hit_ahead_m": "track_hit_ahead_m", "fa": "track_fa",
                  "fa_distance_m": "track_fa_distance_m", "fa_box": "track_fa_box", "fa_class": "track_fa_class"}
 #: The fields ``SensorModel.track`` holds: those fitted again on the track decisions.
-TRACK_FIELDS = ("p_hit", "persistence", "class_given_hit", "fa_start_p", "fa_length_frames", "fa_reports",
+TRACK_FIELDS = ("p_hit", "persistence", "class_given_hit", "hit_ahead_m", "fa_start_p", "fa_length_frames", "fa_reports",
                 "fa_per_camera_hour")
 
 
@@ -127,6 +127,9 @@ class SensorModel:
     fa_reports: list[list[float]]  # [distance_m, x, y, w, h, class index]
     p_regions_idle: list[float]  # [dim, lit]
     area_fraction: dict[str, list[float]]  # threshold condition -> samples of the largest region's share
+    #: kind -> samples of how far ahead of the road user (m, along its heading) a hit stands on the
+    #: ground: 0 for its own body, 10-20 m for a car seen by its headlights' spot going away
+    hit_ahead_m: dict[str, list[float]] = field(default_factory=dict)
     frames: int = 0  # judged camera frames it was fitted on
     candidate_frames: int = 0
     fa_per_camera_hour: float = 0.0  # false alarms started per camera-hour of calibration
@@ -284,4 +287,13 @@ def _fit_decisions(cells: tuple, rows: dict[str, np.ndarray], frames: dict[str, 
     table = fit_p_hit(cells, rows["hit"])
     p = table[cells] if len(rows["hit"]) else np.zeros(0)
     return {"p_hit": table.tolist(), "persistence": fit_persistence(rows, p), "class_given_hit": fit_classes(rows),
-            **fit_false_alarms(frames, camera_hours)}  # fmt: skip
+            "hit_ahead_m": fit_hit_ahead(rows), **fit_false_alarms(frames, camera_hours)}  # fmt: skip
+
+
+def fit_hit_ahead(rows: dict[str, np.ndarray]) -> dict[str, list[float]]:
+    """Per kind, samples of its hits' ground offset ahead of it along its heading, m (0: its body)."""
+    if "hit_ahead_m" not in rows:
+        return {}
+    known = rows["hit"].astype(bool) & np.isfinite(rows["hit_ahead_m"])
+    return {name: [round(float(v), 2) for v in _capped(rows["hit_ahead_m"][known & (rows["kind"] == k)])]
+            for k, name in enumerate(KINDS) if (known & (rows["kind"] == k)).any()}  # fmt: skip

@@ -34,7 +34,7 @@ LIT_REACH_M = 20.0
 #: light about the lane they drive in and the next (2 x 3.5 m lanes, plus the verge).
 BEAM_HALF_WIDTH_M = 4.0
 ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
-               "hit", "det_class", "track_hit", "track_det_class")  # fmt: skip
+               "hit", "det_class", "track_hit", "track_det_class", "hit_ahead_m", "track_hit_ahead_m")  # fmt: skip
 FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
                  "regions", "near_kind", "near_forward_m", "area_fraction", "age_bin",
                  "track_fa", "track_fa_distance_m", "track_fa_box", "track_fa_class")  # fmt: skip
@@ -134,9 +134,11 @@ class CalibrationRecorder(Collector):
         # the frame's own decision (detector, detector_confirmed) and its track's (detector_tracked,
         # detector_located): fast mode draws each controller's kind from its own fit
         hits, fa = self._match(truth, [d for d in detections if d.p_target >= self.target_threshold])
-        fa = self._near_candidates(lamp_index, idx, hits, fa)
+        ahead: dict[int, float] = {}
+        fa = self._near_candidates(lamp_index, idx, hits, fa, ahead)
         track_hits, track_fa = self._match(truth, [d for d in detections if _track_target(d, self.target_threshold)])
-        track_fa = self._near_candidates(lamp_index, idx, track_hits, track_fa)
+        track_ahead: dict[int, float] = {}
+        track_fa = self._near_candidates(lamp_index, idx, track_hits, track_fa, track_ahead)
         young = is_young(recorded.last_rate)
         for a_i in idx.tolist():
             agent = self.agents[a_i]
@@ -145,7 +147,9 @@ class CalibrationRecorder(Collector):
             for col, value in zip(ROW_COLUMNS, (lamp_index, frame, agent.object_id, KINDS.index(agent.cls),
                                                 cand.forward_m[a_i, lamp_index], cand.bearing_rad[a_i, lamp_index],
                                                 agent.speed_mps, light[a_i], young, det_class >= 0, det_class,
-                                                track_class >= 0, track_class),
+                                                track_class >= 0, track_class,
+                                                ahead.get(agent.object_id, 0.0) if det_class >= 0 else np.nan,
+                                                track_ahead.get(agent.object_id, 0.0) if track_class >= 0 else np.nan),
                                   strict=True):  # fmt: skip
                 self.rows[col].append(value)
         self._beam_rows(lamp_index, frame, cand, young, hits, track_hits)
@@ -158,7 +162,8 @@ class CalibrationRecorder(Collector):
         for col, value in zip(FRAME_COLUMNS, values, strict=True):
             self.frames[col].append(value)
 
-    def _near_candidates(self, lamp_index: int, idx: np.ndarray, hits: dict[int, int], fa: list) -> list:
+    def _near_candidates(self, lamp_index: int, idx: np.ndarray, hits: dict[int, int], fa: list,
+                         ahead: dict[int, float] | None = None) -> list:  # fmt: skip
         """Unmatched target detections that stand on the ground near a candidate are that candidate's
         (a walker's light spot, a car's beam on the road ahead of it): a hit, not a false alarm;
         those in the beam of a road user out of view are nobody's false alarm either."""
@@ -179,6 +184,9 @@ class CalibrationRecorder(Collector):
                         break
             if owner is not None:
                 hits[owner.object_id] = DETECTOR_CLASSES.index(d.cls)
+                if ahead is not None:  # how far ahead of its road user the real detector puts it
+                    ahead[owner.object_id] = (ground[0] - owner.x_m) * math.cos(owner.heading_rad) + \
+                        (ground[1] - owner.y_m) * math.sin(owner.heading_rad)
                 continue
             lighter = self._beam_owner(ground)
             if lighter is None:
@@ -217,7 +225,8 @@ class CalibrationRecorder(Collector):
             for col, value in zip(ROW_COLUMNS, (lamp_index, frame, key, KINDS.index(BEAM),
                                                 cand.beam_forward_m[a_i, lamp_index],
                                                 cand.beam_bearing_rad[a_i, lamp_index], agent.speed_mps, light,
-                                                young, det_class >= 0, det_class, track_class >= 0, track_class),
+                                                young, det_class >= 0, det_class, track_class >= 0, track_class,
+                                                0.0 if det_class >= 0 else np.nan, 0.0 if track_class >= 0 else np.nan),
                                   strict=True):  # fmt: skip
                 self.rows[col].append(value)
 
@@ -237,7 +246,7 @@ class CalibrationRecorder(Collector):
         rows = {c: np.asarray(v) for c, v in self.rows.items()}
         for c in ("camera", "frame", "object_id", "kind", "det_class", "track_det_class"):
             rows[c] = rows[c].astype(np.int64).reshape(-1)
-        for c in ("forward_m", "bearing_rad", "speed_mps", "light"):
+        for c in ("forward_m", "bearing_rad", "speed_mps", "light", "hit_ahead_m", "track_hit_ahead_m"):
             rows[c] = rows[c].astype(np.float64).reshape(-1)
         rows["young"] = rows["young"].astype(bool).reshape(-1)
         rows["hit"] = rows["hit"].astype(bool).reshape(-1)

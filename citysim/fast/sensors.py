@@ -39,6 +39,8 @@ DRAWN_P_TARGET = 0.9
 #: Detector range, m: beyond it a candidate is not 'fully visible' truth for the confusion figures.
 DETECTOR_RANGE_M = 25.0
 _NO_INDICES = np.zeros(0, np.int64)
+#: A hit standing more than this ahead of its road user (m) is its light's patch, not its body.
+AHEAD_OF_BODY_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -87,6 +89,7 @@ class FastSensors:
         self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
         self.class_cdf = {k: np.cumsum(v) for k, v in model.class_given_hit.items()}
         self.area_samples = {k: np.asarray(v) for k, v in model.area_fraction.items()}
+        self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
         self.frame_k = -1
         self.agents: list = []
         self.levels = np.zeros(self.geometry.n)
@@ -260,10 +263,22 @@ class SensedDetector:
             if hit:
                 cls = DETECTOR_CLASSES[int(np.searchsorted(s.class_cdf[a.cls], self.rng.random(), side="right"))
                                        if a.cls in s.class_cdf else 0]  # fmt: skip
-                out.append(_detection(s.box_px(i, int(idx[n])), float(fwd[n]), cls, a.object_id))
+                out.append(self._hit_detection(a, int(idx[n]), float(fwd[n]), cls))
         if len(self.previous) > 512:
             self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
         return out
+
+    def _hit_detection(self, agent, agent_index: int, forward_m: float, cls: str) -> Detection:
+        """A hit where the real detector puts it: on the road user's body, or (a sample of how far
+        ahead calibration found its hits) on the patch its light throws ahead, as a car going away
+        is seen by its headlights' spot; where it stands decides the zones a located track lights."""
+        s = self.sensors
+        samples = s.ahead_samples.get(agent.cls)
+        ahead_m = float(samples[int(self.rng.integers(len(samples)))]) if samples is not None else 0.0
+        if ahead_m < AHEAD_OF_BODY_M:
+            return _detection(s.box_px(self.lamp_index, agent_index), forward_m, cls, agent.object_id)
+        box = s.geometry.beam_box_px(self.lamp_index, agent, ahead_m)
+        return _detection(box, forward_m + ahead_m, cls, agent.object_id)
 
     def _beams(self, idx: np.ndarray, k: int, young: bool) -> list[Detection]:
         """Draws for the beams of road users out of view (kind ``BEAM``, each its own chain and

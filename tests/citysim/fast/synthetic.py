@@ -17,7 +17,8 @@ def rows(n: int = 0, **columns) -> dict[str, np.ndarray]:
     """Candidate rows: every column of ``ROW_COLUMNS``, defaults for the ones not given."""
     defaults = {"camera": 0, "frame": np.arange(n), "object_id": 1, "kind": KINDS.index("pedestrian"),
                 "forward_m": 12.0, "bearing_rad": 0.0, "speed_mps": 1.4, "light": 0.2, "young": False,
-                "hit": False, "det_class": -1, "track_hit": False, "track_det_class": -1}  # fmt: skip
+                "hit": False, "det_class": -1, "track_hit": False, "track_det_class": -1,
+                "hit_ahead_m": np.nan, "track_hit_ahead_m": np.nan}  # fmt: skip
     out = {}
     for col in ROW_COLUMNS:
         value = columns.get(col, defaults[col])

@@ -114,3 +114,24 @@ def test_a_car_out_of_view_lights_the_zone_its_beam_reaches_only_when_beams_are_
     blind = fast(scenario, "detector_confirmed", constant_model(0.0))
     assert triggers(blind) == 0 and triggers(seen) > 0
     assert seen["detection"]["tp"] == 0  # a beam is nobody's truth box
+
+
+def test_a_hit_stands_as_far_ahead_of_its_road_user_as_calibration_found():
+    # a car seen only by the spot its headlights throw 15 m ahead: its detections stand there
+    from citysim.fast.sense import fast_sensors
+    from citysim.sim.night import build_night
+    from citysim.world.agents import AgentState
+
+    scenario = scenario_from_mapping(tiny_scenario())
+    night = build_night(scenario)
+    model = constant_model(1.0)
+    model.hit_ahead_m = {"vehicle": [15.0]}
+    sensors = fast_sensors(night, model)
+    cam = sensors.geometry.cameras[0]
+    x0 = float(cam.position_m[0])
+    car = AgentState(7, "vehicle", x0 + 4.0, -1.6, 0.0, 10.0, 4.5, 1.8, 1.5, light_on=True)
+    sensors.observe(0, [car], np.full(3, 0.2))
+    (det,) = sensors.detectors(None, 0.5)[0]._candidates(np.array([0]), 0, False)
+    x, y, w, h = det.box_px
+    ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]]))[0]
+    assert ground[0] == pytest.approx(x0 + 19.0, abs=0.5) and ground[1] == pytest.approx(-1.6, abs=0.5)

@@ -42,8 +42,11 @@ def test_a_detection_on_the_ground_near_a_candidate_is_its_hit():
     beam = detection_at(cam, x0 + 10.0, 1.6)  # the car's beam, 15 m ahead of it
     stray = detection_at(cam, x0 + 12.0, 4.3)  # 8.6 m across from the walker, no light there
     hits: dict[int, int] = {}
-    left = recorder._near_candidates(0, idx, hits, [near_walker, beam, stray])
+    ahead: dict[int, float] = {}
+    left = recorder._near_candidates(0, idx, hits, [near_walker, beam, stray], ahead)
     assert set(hits) == {1, 2} and left == [stray]
+    # where each hit stands along its road user's heading (+x here), m: fast mode puts hits there
+    assert ahead[1] == pytest.approx(1.5, abs=0.3) and ahead[2] == pytest.approx(-15.0, abs=0.5)
 
 
 def test_boxes_projected_together_equal_boxes_projected_one_by_one():
