@@ -66,3 +66,15 @@ class GroundProjector:
         """A ground velocity from the camera's frame to the world's (x, y), m/s."""
         c, s = self.cos_yaw, self.sin_yaw
         return (forward_mps * c + right_mps * s, forward_mps * s - right_mps * c)
+
+
+def line_of_sight_cos(vf_mps: float, vr_mps: float, speed_mps: float, forward_m: float,
+                      right_m: float) -> float | None:  # fmt: skip
+    """Cosine between a ground velocity (``vf_mps`` forward, ``vr_mps`` right, of length
+    ``speed_mps``) and the line of sight from the pole foot to the ground point (``forward_m``,
+    ``right_m``), all in the camera's ground frame: 1 going straight away from the camera, -1
+    coming straight at it; None when the velocity or the distance is zero."""
+    reach_m = math.hypot(forward_m, right_m)
+    if speed_mps <= 0.0 or reach_m <= 0.0:
+        return None
+    return (vf_mps * forward_m + vr_mps * right_m) / (speed_mps * reach_m)

@@ -49,6 +49,7 @@ import math
 from dataclasses import dataclass
 
 from detector.tracks.checks import require_int_at_least, require_positive
+from detector.tracks.ground import line_of_sight_cos
 from detector.tracks.track import Track, median
 
 #: The rejections a steady vehicle-like motion outweighs (see the module docstring).
@@ -158,10 +159,8 @@ def _judge(track: Track, limits: MotionLimits) -> tuple[str | None, float]:
     if not limits.min_speed_mps <= speed_mps <= limits.max_speed_mps:
         return "speed out of range", speed_mps
     right_m = sum(p[2] for p in points) / len(points)
-    reach_m = math.hypot(forward_m, right_m)
-    # cosine between the velocity and the way back to the pole foot: 1 = straight at the camera
-    towards = -(vf * forward_m + vr * right_m) / (speed_mps * reach_m) if reach_m > 0 else 0.0
-    if towards > math.cos(math.radians(limits.approach_deg)):
+    away = line_of_sight_cos(vf, vr, speed_mps, forward_m, right_m)
+    if away is not None and -away > math.cos(math.radians(limits.approach_deg)):
         return "coming toward the camera", speed_mps
     if residual_m > limits.max_residual_share * max(forward_m, 1.0):
         return "not a straight steady path", speed_mps

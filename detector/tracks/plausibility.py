@@ -45,6 +45,7 @@ from dataclasses import dataclass
 
 from detector.classes import TABLE1
 from detector.tracks.checks import require_int_at_least, require_positive
+from detector.tracks.ground import line_of_sight_cos
 from detector.tracks.track import SWAY_FRAMES, Track, median
 
 
@@ -170,11 +171,10 @@ def heading_cos(track: Track) -> float | None:
     """Cosine between the track's ground velocity and the line of sight from the pole foot (1: going
     straight away, -1: coming straight at the camera); None while either is unknown."""
     speed = track.speed_mps
-    reach_m = math.hypot(track.forward_m, track.right_m)
-    if speed is None or speed <= 0.0 or reach_m <= 0.0:
+    if speed is None:
         return None
     vf, vr = track.velocity_mps
-    return (vf * track.forward_m + vr * track.right_m) / (speed * reach_m)
+    return line_of_sight_cos(vf, vr, speed, track.forward_m, track.right_m)
 
 
 def _sways(track: Track, limits: PlausibilityLimits) -> bool:
