@@ -144,14 +144,11 @@ class CalibrationRecorder(Collector):
             agent = self.agents[a_i]
             det_class = hits.get(agent.object_id, -1)
             track_class = track_hits.get(agent.object_id, -1)
-            for col, value in zip(ROW_COLUMNS, (lamp_index, frame, agent.object_id, KINDS.index(agent.cls),
-                                                cand.forward_m[a_i, lamp_index], cand.bearing_rad[a_i, lamp_index],
-                                                agent.speed_mps, light[a_i], young, det_class >= 0, det_class,
-                                                track_class >= 0, track_class,
-                                                ahead.get(agent.object_id, 0.0) if det_class >= 0 else np.nan,
-                                                track_ahead.get(agent.object_id, 0.0) if track_class >= 0 else np.nan),
-                                  strict=True):  # fmt: skip
-                self.rows[col].append(value)
+            self._add_row((lamp_index, frame, agent.object_id, KINDS.index(agent.cls), cand.forward_m[a_i, lamp_index],
+                           cand.bearing_rad[a_i, lamp_index], agent.speed_mps, light[a_i], young, det_class >= 0,
+                           det_class, track_class >= 0, track_class,
+                           ahead.get(agent.object_id, 0.0) if det_class >= 0 else np.nan,
+                           track_ahead.get(agent.object_id, 0.0) if track_class >= 0 else np.nan))  # fmt: skip
         self._beam_rows(lamp_index, frame, cand, young, hits, track_hits)
         near = idx[np.argmin(cand.forward_m[idx, lamp_index])] if len(idx) else -1
         values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, *_fa_values(fa),
@@ -185,8 +182,7 @@ class CalibrationRecorder(Collector):
             if owner is not None:
                 hits[owner.object_id] = DETECTOR_CLASSES.index(d.cls)
                 if ahead is not None:  # how far ahead of its road user the real detector puts it
-                    ahead[owner.object_id] = (ground[0] - owner.x_m) * math.cos(owner.heading_rad) + \
-                        (ground[1] - owner.y_m) * math.sin(owner.heading_rad)
+                    ahead[owner.object_id] = _along_heading(owner, ground)[0]
                 continue
             lighter = self._beam_owner(ground)
             if lighter is None:
@@ -206,9 +202,7 @@ class CalibrationRecorder(Collector):
         for a in self.agents:
             if not a.light_on:
                 continue
-            dx, dy = ground_m[0] - a.x_m, ground_m[1] - a.y_m
-            ahead_m = dx * math.cos(a.heading_rad) + dy * math.sin(a.heading_rad)
-            across_m = -dx * math.sin(a.heading_rad) + dy * math.cos(a.heading_rad)
+            ahead_m, across_m = _along_heading(a, ground_m)
             if 0.0 < ahead_m <= LIT_REACH_M and abs(across_m) <= BEAM_HALF_WIDTH_M:
                 return a
         return None
@@ -222,13 +216,15 @@ class CalibrationRecorder(Collector):
             key = beam_id(agent.object_id)
             det_class, track_class = hits.get(key, -1), track_hits.get(key, -1)
             light = float(self.geometry.light_at(np.array([beam_x_m(agent)]), self.levels)[0])
-            for col, value in zip(ROW_COLUMNS, (lamp_index, frame, key, KINDS.index(BEAM),
-                                                cand.beam_forward_m[a_i, lamp_index],
-                                                cand.beam_bearing_rad[a_i, lamp_index], agent.speed_mps, light,
-                                                young, det_class >= 0, det_class, track_class >= 0, track_class,
-                                                0.0 if det_class >= 0 else np.nan, 0.0 if track_class >= 0 else np.nan),
-                                  strict=True):  # fmt: skip
-                self.rows[col].append(value)
+            self._add_row((lamp_index, frame, key, KINDS.index(BEAM), cand.beam_forward_m[a_i, lamp_index],
+                           cand.beam_bearing_rad[a_i, lamp_index], agent.speed_mps, light, young, det_class >= 0,
+                           det_class, track_class >= 0, track_class, 0.0 if det_class >= 0 else np.nan,
+                           0.0 if track_class >= 0 else np.nan))  # fmt: skip
+
+    def _add_row(self, values: tuple) -> None:
+        """One candidate row, its values in ``ROW_COLUMNS`` order."""
+        for col, value in zip(ROW_COLUMNS, values, strict=True):
+            self.rows[col].append(value)
 
     def _match(self, truth: Sequence, targets: Sequence) -> tuple[dict[int, int], list]:
         """Truth object id -> detected class index of its target detection; unmatched target detections."""
@@ -255,6 +251,14 @@ class CalibrationRecorder(Collector):
         for c in ("fa_box", "track_fa_box"):
             frames[c] = frames[c].astype(np.float64).reshape(-1, 4)
         return rows, frames
+
+
+def _along_heading(agent: AgentState, ground_m) -> tuple[float, float]:
+    """Where the ground point ``ground_m`` (world x, y, m) lies from ``agent``: metres ahead along
+    its heading, and across it (positive to its left)."""
+    dx, dy = ground_m[0] - agent.x_m, ground_m[1] - agent.y_m
+    cos_h, sin_h = math.cos(agent.heading_rad), math.sin(agent.heading_rad)
+    return dx * cos_h + dy * sin_h, -dx * sin_h + dy * cos_h
 
 
 def _track_target(detection, threshold: float) -> bool:

@@ -248,25 +248,31 @@ class SensedDetector:
         agents = [s.agents[j] for j in idx.tolist()]
         kinds = np.array([KINDS.index(a.cls) for a in agents])
         fwd = s.cand.forward_m[idx, i]
-        p = s.p_hit_of(i, idx, young)
-        rho = s.persistence[kinds]
-        for n, a in enumerate(agents):
-            prev = self.previous.get(a.object_id)
-            if prev is not None and prev[0] == k - 1:  # the chain's step from the last frame's draw
-                p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
-        hits = self.rng.random(len(agents)) < p
-        out = []
-        for n, a in enumerate(agents):
-            hit = bool(hits[n])
-            self.previous[a.object_id] = (k, hit)
-            self.tracker.update(k, a.object_id, hit)
-            if hit:
-                cls = DETECTOR_CLASSES[int(np.searchsorted(s.class_cdf[a.cls], self.rng.random(), side="right"))
-                                       if a.cls in s.class_cdf else 0]  # fmt: skip
-                out.append(self._hit_detection(a, int(idx[n]), float(fwd[n]), cls))
+        hits = self._chain_draws([a.object_id for a in agents], s.p_hit_of(i, idx, young), s.persistence[kinds], k)
+        out = [self._hit_detection(a, int(idx[n]), float(fwd[n]), self._drawn_class(a.cls))
+               for n, a in enumerate(agents) if hits[n]]  # fmt: skip
         if len(self.previous) > 512:
             self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
         return out
+
+    def _chain_draws(self, keys: list[int], p: np.ndarray, rho: np.ndarray, k: int) -> list[bool]:
+        """Frame ``k``'s hits of the candidates ``keys`` (object or beam ids): each a two-state chain
+        with the cell's P and its kind's persistence ``rho``, stepped from the last frame's draw;
+        every draw is kept for the next frame and told to the k-of-n tracker."""
+        for n, key in enumerate(keys):
+            prev = self.previous.get(key)
+            if prev is not None and prev[0] == k - 1:  # the chain's step from the last frame's draw
+                p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
+        hits = (self.rng.random(len(keys)) < p).tolist()
+        for key, hit in zip(keys, hits, strict=True):
+            self.previous[key] = (k, hit)
+            self.tracker.update(k, key, hit)
+        return hits
+
+    def _drawn_class(self, kind: str) -> str:
+        """The detector class a hit of ``kind`` is reported as, drawn from calibration's shares."""
+        cdf = self.sensors.class_cdf.get(kind)
+        return DETECTOR_CLASSES[int(np.searchsorted(cdf, self.rng.random(), side="right")) if cdf is not None else 0]
 
     def _hit_detection(self, agent, agent_index: int, forward_m: float, cls: str) -> Detection:
         """A hit where the real detector puts it: on the road user's body, or (a sample of how far
@@ -289,20 +295,10 @@ class SensedDetector:
         light = s.geometry.light_at(np.array([beam_x_m(a) for a in agents]), s.levels)
         cells = cell_of(np.full(len(agents), kind), fwd, s.cand.beam_bearing_rad[idx, i], light,
                         np.full(len(agents), young), np.array([a.speed_mps for a in agents]))  # fmt: skip
-        p, rho = s.p_hit[cells], float(s.persistence[kind])
-        out = []
-        for n, a in enumerate(agents):
-            key = beam_id(a.object_id)
-            prev = self.previous.get(key)
-            if prev is not None and prev[0] == k - 1:
-                p[n] = p[n] + rho * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho)
-            hit = bool(self.rng.random() < p[n])
-            self.previous[key] = (k, hit)
-            self.tracker.update(k, key, hit)
-            if hit:
-                cls = DETECTOR_CLASSES[int(np.searchsorted(s.class_cdf[BEAM], self.rng.random(), side="right"))]
-                out.append(_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), cls, key))
-        return out
+        keys = [beam_id(a.object_id) for a in agents]
+        hits = self._chain_draws(keys, s.p_hit[cells], np.full(len(agents), s.persistence[kind]), k)
+        return [_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), self._drawn_class(BEAM), keys[n])
+                for n, a in enumerate(agents) if hits[n]]  # fmt: skip
 
     def _false_alarm(self, k: int) -> Detection | None:
         model = self.sensors.model
