@@ -25,7 +25,11 @@ whether the detector found each), it holds:
   judged every frame, as in full fidelity).
 * the threshold baselines' trigger: samples of the largest foreground region's share of the
   frame, per condition (nothing in view by light level, or the nearest candidate's kind and
-  distance bin).
+  distance bin, or with no candidate the nearest beam of a road user out of view), and
+  ``area_persistence``: how long a big region lasts (consecutive frames are nearly the same
+  picture: a share over 5 % is still over 5 % in the next frame 96 % of the time). Fast mode keeps
+  a frame's rank in its condition's samples with that probability, so big regions come in
+  episodes as they do, not as independent frames that would trigger every second.
 
 Saved as JSON (small tables and capped sample lists).
 """
@@ -34,6 +38,7 @@ from __future__ import annotations
 
 import bisect
 import json
+import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -64,7 +69,12 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 8
+MODEL_VERSION = 9
+#: The shares of the frame a threshold baseline triggers at (the paper's 5 % and 0.5 %): the
+#: persistence of a big foreground region is fitted on how long it stays above these.
+PERSISTENCE_FRACTIONS = (0.05, 0.005)
+#: The persistence is capped below 1 so a drawn episode always ends.
+MAX_AREA_PERSISTENCE = 0.99
 #: The record columns (``citysim.fast.records``) the track-level fit reads in place of the frame-level ones.
 TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "hit_ahead_m": "track_hit_ahead_m", "fa": "track_fa",
                  "fa_distance_m": "track_fa_distance_m", "fa_box": "track_fa_box", "fa_class": "track_fa_class"}
@@ -114,6 +124,18 @@ def threshold_condition(kind: int, forward_m: float, lit: bool, age_bin: int | N
     return key if age_bin is None else f"{key}/age{age_bin}"
 
 
+def nearest_in_view(kinds: np.ndarray, forward_m: np.ndarray, beam_forward_m: np.ndarray) -> tuple[int, float]:
+    """The subject of a camera frame's threshold condition: its nearest candidate (``KINDS`` index,
+    forward m); with no candidate the nearest beam of a road user out of view (a beam sweeping
+    the road makes big foreground regions with nobody in view); else (-1, nan)."""
+    if len(kinds):
+        j = int(np.argmin(forward_m))
+        return int(kinds[j]), float(forward_m[j])
+    if len(beam_forward_m):
+        return KINDS.index(BEAM), float(np.min(beam_forward_m))
+    return -1, math.nan
+
+
 @dataclass
 class SensorModel:
     """A fitted sensor model (see the module docstring); ``key`` is the hash it is cached by."""
@@ -127,6 +149,8 @@ class SensorModel:
     fa_reports: list[list[float]]  # [distance_m, x, y, w, h, class index]
     p_regions_idle: list[float]  # [dim, lit]
     area_fraction: dict[str, list[float]]  # threshold condition -> samples of the largest region's share
+    #: P(a judged frame keeps the last frame's rank among its condition's area samples)
+    area_persistence: float = 0.0
     #: kind -> samples of how far ahead of the road user (m, along its heading) a hit stands on the
     #: ground: 0 for its own body, 10-20 m for a car seen by its headlights' spot going away
     hit_ahead_m: dict[str, list[float]] = field(default_factory=dict)
@@ -261,6 +285,24 @@ def fit_area_fractions(frames: dict[str, np.ndarray]) -> dict[str, list[float]]:
     return {key: _capped(np.array(v)) for key, v in sorted(by_key.items())}
 
 
+def fit_area_persistence(frames: dict[str, np.ndarray]) -> float:
+    """P(keep) of a chain that keeps the last frame's rank among the area samples, else draws anew:
+    for such a chain P(over f next | over f now) = keep + (1 - keep) P(over f), so each of the
+    ``PERSISTENCE_FRACTIONS`` f seen in calibration's consecutive judged frames (same camera, frame
+    k then k + 1) gives keep = (P(over f next | over f now) - P(over f)) / (1 - P(over f)); their mean."""
+    order = np.lexsort((frames["frame"], frames["camera"]))
+    camera, frame, share = frames["camera"][order], frames["frame"][order], frames["area_fraction"][order]
+    pairs = (camera[1:] == camera[:-1]) & (frame[1:] == frame[:-1] + 1)
+    now, after = share[:-1][pairs], share[1:][pairs]
+    keeps = []
+    for fraction in PERSISTENCE_FRACTIONS:
+        over_now, over_after = now > fraction, after > fraction
+        p_over = float(over_now.mean()) if len(now) else 0.0
+        if 0.0 < p_over < 1.0:
+            keeps.append((float(over_after[over_now].mean()) - p_over) / (1.0 - p_over))
+    return float(np.clip(np.mean(keeps), 0.0, MAX_AREA_PERSISTENCE)) if keeps else 0.0
+
+
 def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray], camera_hours: float,
                      key: str = "") -> SensorModel:  # fmt: skip
     """Fit from candidate ``rows`` and judged ``frames`` (column arrays, see ``citysim.fast.records``)."""
@@ -276,7 +318,8 @@ def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray],
         fitted = _fit_decisions(cells, track_rows, track_frames, camera_hours)
         track = {name: fitted[name] for name in TRACK_FIELDS}
     return SensorModel(
-        key=key, **decisions, area_fraction=fit_area_fractions(frames), frames=int(len(frames["camera"])),
+        key=key, **decisions, area_fraction=fit_area_fractions(frames),
+        area_persistence=fit_area_persistence(frames), frames=int(len(frames["camera"])),
         candidate_frames=int(len(rows["hit"])), track=track,
     )  # fmt: skip
 

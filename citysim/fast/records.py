@@ -19,7 +19,7 @@ import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
 from citysim.fast.geometry import CameraGeometry, beam_id, beam_x_m
-from citysim.fast.model import BEAM, KINDS, YOUNG_FRAMES, background_age_bin
+from citysim.fast.model import BEAM, KINDS, YOUNG_FRAMES, background_age_bin, nearest_in_view
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.world.agents import AgentState
@@ -150,11 +150,12 @@ class CalibrationRecorder(Collector):
                            ahead.get(agent.object_id, 0.0) if det_class >= 0 else np.nan,
                            track_ahead.get(agent.object_id, 0.0) if track_class >= 0 else np.nan))  # fmt: skip
         self._beam_rows(lamp_index, frame, cand, young, hits, track_hits)
-        near = idx[np.argmin(cand.forward_m[idx, lamp_index])] if len(idx) else -1
+        beams = np.flatnonzero(cand.beam_seen[:, lamp_index]) if len(self.agents) else idx
+        near_kind, near_forward_m = nearest_in_view(np.array([KINDS.index(self.agents[j].cls) for j in idx.tolist()]),
+                                                    cand.forward_m[idx, lamp_index],
+                                                    cand.beam_forward_m[beams, lamp_index])  # fmt: skip
         values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, *_fa_values(fa),
-                  len(recorded.inner.last_regions) > 0,
-                  KINDS.index(self.agents[near].cls) if near >= 0 else -1,
-                  float(cand.forward_m[near, lamp_index]) if near >= 0 else np.nan, recorded.last_area_fraction,
+                  len(recorded.inner.last_regions) > 0, near_kind, near_forward_m, recorded.last_area_fraction,
                   background_age_bin(recorded.last_rate), *_fa_values(track_fa))  # fmt: skip
         for col, value in zip(FRAME_COLUMNS, values, strict=True):
             self.frames[col].append(value)

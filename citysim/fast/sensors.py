@@ -28,6 +28,7 @@ from citysim.fast.model import (
     SensorModel,
     background_age_bin,
     cell_of,
+    nearest_in_view,
     threshold_condition,
 )
 from citysim.fast.records import is_young
@@ -88,7 +89,7 @@ class FastSensors:
         self.p_hit = model.p_hit_array()
         self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
         self.class_cdf = {k: np.cumsum(v) for k, v in model.class_given_hit.items()}
-        self.area_samples = {k: np.asarray(v) for k, v in model.area_fraction.items()}
+        self.area_samples = {k: np.sort(np.asarray(v, dtype=np.float64)) for k, v in model.area_fraction.items()}
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
         self.frame_k = -1
         self.agents: list = []
@@ -342,21 +343,30 @@ class SensedSegmenter(_LearningRate):
         self.sensors = sensors
         self.lamp_index = lamp_index
         self.rng = sensors.rngs[lamp_index]
+        self.last_frame_k = -2
+        self.rank = 0.0
+
+    def reset(self) -> None:
+        """A rebuilt background starts a new episode (its young frames have samples of their own)."""
+        self.last_frame_k = -2
 
     def apply(self, frame: SensedFrame, learning_rate: float | None = None) -> _Areas:
         s, i = self.sensors, self.lamp_index
         idx = s.candidates_of(i)
-        if len(idx):
-            near = int(idx[np.argmin(s.cand.forward_m[idx, i])])
-            kind, forward_m, lit = KINDS.index(s.agents[near].cls), float(s.cand.forward_m[near, i]), True
-        else:
-            kind, forward_m, lit = -1, 0.0, bool(s.lit(i))
+        kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
+                                          s.cand.forward_m[idx, i], s.cand.beam_forward_m[s.beams_of(i), i])
+        lit = True if kind >= 0 else bool(s.lit(i))
         # this background age's samples where calibration saw the condition at that age, else any age's
         samples = s.area_samples.get(threshold_condition(kind, forward_m, lit, background_age_bin(learning_rate)))
         if samples is None:
             samples = s.area_samples.get(threshold_condition(kind, forward_m, lit))
+        # the frame's rank among its condition's (sorted) samples: kept from the last judged frame
+        # with the model's persistence, so a big region lasts an episode as in the real frames
+        if not (s.frame_k == self.last_frame_k + 1 and self.rng.random() < s.model.area_persistence):
+            self.rank = self.rng.random()
+        self.last_frame_k = s.frame_k
         if samples is None or not len(samples):
             return _Areas(np.zeros(0))
-        fraction = float(samples[int(self.rng.integers(len(samples)))])
+        fraction = float(samples[min(int(self.rank * len(samples)), len(samples) - 1)])
         n_px = frame.shape[0] * frame.shape[1]
         return _Areas(np.array([fraction * n_px]) if fraction > 0 else np.zeros(0))

@@ -135,3 +135,29 @@ def test_a_hit_stands_as_far_ahead_of_its_road_user_as_calibration_found():
     x, y, w, h = det.box_px
     ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]]))[0]
     assert ground[0] == pytest.approx(x0 + 19.0, abs=0.5) and ground[1] == pytest.approx(-1.6, abs=0.5)
+
+
+@pytest.mark.parametrize("keep", [0.0, 0.95])
+def test_the_threshold_segmenter_draws_big_regions_in_episodes_as_long_as_calibration_saw(keep):
+    # nothing in view; calibration saw a region over 5 % of the frame in 1 frame of 10, in episodes
+    # of 1 / (1 - keep) frames: the draws keep that share, and the episodes' length
+    from citysim.fast.sense import fast_sensors
+    from citysim.fast.sensors import SensedFrame
+    from citysim.sim.night import build_night
+
+    model = constant_model(0.0)
+    model.area_fraction = {"none/0": [0.0] * 9 + [0.1]}
+    model.area_persistence = keep
+    sensors = fast_sensors(build_night(scenario_from_mapping(tiny_scenario())), model)
+    segmenter = sensors.segmenters(None)[0]
+    over = []
+    for k in range(20000):
+        sensors.observe(k, [], np.full(3, 0.2))
+        regions = segmenter.apply(SensedFrame(sensors, 0), 1e-3)
+        over.append(len(regions) > 0)
+    over = np.array(over)
+    starts = int((over[1:] & ~over[:-1]).sum()) + int(over[0])
+    # share over: 0.1 (episodes of 20 frames: about 100 of them, so a standard error near 0.01)
+    assert over.mean() == pytest.approx(0.1, abs=0.04)
+    # mean episode: 1 / (1 - keep - (1 - keep) 0.1) frames, 1.1 for independent draws, 18.2 for keep 0.95
+    assert over.sum() / starts == pytest.approx(1.0 / ((1.0 - keep) * 0.9), rel=0.25)

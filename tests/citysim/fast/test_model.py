@@ -12,6 +12,7 @@ from citysim.fast.model import (
     background_age_bin,
     cell_of,
     fit_sensor_model,
+    nearest_in_view,
 )
 from tests.citysim.fast.synthetic import frames, rows
 
@@ -78,6 +79,31 @@ def test_detected_classes_and_threshold_areas_come_from_their_frames():
     assert model.area_fraction["none/0/age0"] == [0.0] and model.area_fraction["none/0/age2"] == [0.001]
     assert model.area_fraction["vehicle/2"] == [0.08, 0.06] == model.area_fraction["vehicle/2/age2"]
     assert background_age_bin(1.0) == 0 and background_age_bin(1 / 32) == 1 and background_age_bin(1 / 500) == 2
+
+
+def test_big_foreground_regions_last_as_long_as_calibration_saw_them():
+    # episodes of 20 frames over 5 % of the frame, then 180 frames of nothing, on two cameras:
+    # P(over next | over now) = 19/20 and P(over) = 0.1, so keep = (0.95 - 0.1) / 0.9 = 0.944
+    n, episode = 4000, (np.arange(4000) % 200) < 20
+    camera = np.repeat([0, 1], n // 2)
+    frame = np.tile(np.arange(n // 2), 2)
+    area = frames(n, camera=camera, frame=frame, area_fraction=np.where(episode, 0.08, 0.0))
+    assert fit_sensor_model(rows(0), area, camera_hours=1.0).area_persistence == pytest.approx(0.944, abs=0.002)
+    # the same shares in independent frames: nothing to keep
+    shuffled = frames(n, camera=camera, frame=frame,
+                      area_fraction=np.random.default_rng(5).permutation(np.where(episode, 0.08, 0.0)))
+    assert fit_sensor_model(rows(0), shuffled, camera_hours=1.0).area_persistence == pytest.approx(0.0, abs=0.03)
+    # frames that are not consecutive (an idle camera judged every 15th) are no pair
+    strided = frames(n, camera=camera, frame=frame * 15, area_fraction=np.where(episode, 0.08, 0.0))
+    assert fit_sensor_model(rows(0), strided, camera_hours=1.0).area_persistence == 0.0
+
+
+def test_a_frame_with_only_a_beam_in_view_is_the_beams_condition():
+    beam = KINDS.index("beam")
+    assert nearest_in_view(np.array([PED, CAR]), np.array([14.0, 9.0]), np.array([3.0])) == (CAR, 9.0)
+    assert nearest_in_view(np.array([]), np.array([]), np.array([12.0, 7.0])) == (beam, 7.0)
+    kind, forward_m = nearest_in_view(np.array([]), np.array([]), np.array([]))
+    assert kind == -1 and np.isnan(forward_m)
 
 
 def test_the_track_decisions_have_their_own_hit_and_false_alarm_tables():
