@@ -29,7 +29,7 @@ from citysim.fast.model import (
     background_age_bin,
     cell_of,
     nearest_in_view,
-    threshold_condition,
+    threshold_conditions,
 )
 from citysim.fast.records import is_young
 from detector.detector import Detection
@@ -355,11 +355,8 @@ class SensedSegmenter(_LearningRate):
         idx = s.candidates_of(i)
         kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
                                           s.cand.forward_m[idx, i], s.cand.beam_forward_m[s.beams_of(i), i])
-        lit = True if kind >= 0 else bool(s.lit(i))
-        # this background age's samples where calibration saw the condition at that age, else any age's
-        samples = s.area_samples.get(threshold_condition(kind, forward_m, lit, background_age_bin(learning_rate)))
-        if samples is None:
-            samples = s.area_samples.get(threshold_condition(kind, forward_m, lit))
+        conditions = threshold_conditions(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate))
+        samples = next((s.area_samples[c] for c in conditions if c in s.area_samples), None)
         # the frame's rank among its condition's (sorted) samples: kept from the last judged frame
         # with the model's persistence, so a big region lasts an episode as in the real frames
         if not (s.frame_k == self.last_frame_k + 1 and self.rng.random() < s.model.area_persistence):

@@ -110,7 +110,8 @@ def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: 
     rows = merge_columns([p[0] for p in parts])
     frames = merge_columns([p[1] for p in parts])
     camera_hours = duration_s * runs * len(build_street(scenario).lamps) / 3600.0
-    model = fit_sensor_model(rows, frames, camera_hours, key=path.stem)
+    model = fit_sensor_model(rows, frames, camera_hours, key=path.stem,
+                             idle_frame_stride=scenario.simulation.idle_frame_stride)
     model.save(path)
     return model, path
 

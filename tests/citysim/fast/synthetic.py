@@ -53,7 +53,7 @@ def constant_model(p_hit: float, fa_start_p: float = 0.0, area_fraction: float =
     model.fa_start_p = [fa_start_p, fa_start_p]
     model.fa_length_frames = [5]
     model.fa_reports = [[15.0, 100.0, 100.0, 20.0, 40.0, 1.0]]
-    conditions = [f"none/{b}" for b in (0, 1)] + [f"{k}/{d}" for k in KINDS for d in range(12)]
+    conditions = [f"none/{b}" for b in ("dim", "lit")] + [f"{k}/{d}" for k in KINDS for d in range(12)]
     model.area_fraction = {c: [area_fraction] for c in conditions}
     model.track = {name: getattr(model, name) for name in TRACK_FIELDS}  # tracks decide alike
     return model

@@ -146,7 +146,7 @@ def test_the_threshold_segmenter_draws_big_regions_in_episodes_as_long_as_calibr
     from citysim.sim.night import build_night
 
     model = constant_model(0.0)
-    model.area_fraction = {"none/0": [0.0] * 9 + [0.1]}
+    model.area_fraction = {"none/dim": [0.0] * 9 + [0.1]}
     model.area_persistence = keep
     sensors = fast_sensors(build_night(scenario_from_mapping(tiny_scenario())), model)
     segmenter = sensors.segmenters(None)[0]

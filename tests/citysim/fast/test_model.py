@@ -13,6 +13,7 @@ from citysim.fast.model import (
     cell_of,
     fit_sensor_model,
     nearest_in_view,
+    threshold_conditions,
 )
 from tests.citysim.fast.synthetic import frames, rows
 
@@ -74,10 +75,16 @@ def test_detected_classes_and_threshold_areas_come_from_their_frames():
     model = fit_sensor_model(car_rows, area, camera_hours=1.0)
     classes = model.class_given_hit["vehicle"]
     assert classes[4] == pytest.approx(40.5 / 50.5) and classes[3] == pytest.approx(10 / 50.5)
-    assert model.area_fraction["none/0"] == [0.0, 0.001]
+    assert model.area_fraction["none/dim"] == [0.0, 0.001]
     # a just-rebuilt background's frames are kept apart too (looked up first in fast mode)
-    assert model.area_fraction["none/0/age0"] == [0.0] and model.area_fraction["none/0/age2"] == [0.001]
-    assert model.area_fraction["vehicle/2"] == [0.08, 0.06] == model.area_fraction["vehicle/2/age2"]
+    assert model.area_fraction["none/dim/age0"] == [0.0] and model.area_fraction["none/dim/age2"] == [0.001]
+    assert model.area_fraction["vehicle/2/dim"] == [0.08, 0.06] == model.area_fraction["vehicle/2/dim/age2"]
+    assert model.area_fraction["vehicle/2"] == [0.08, 0.06]  # a candidate's key without the light too
+    assert threshold_conditions(CAR, 9.0, True, 2) == ("vehicle/2/lit/age2", "vehicle/2/lit", "vehicle/2")
+    assert threshold_conditions(-1, np.nan, False, 0) == ("none/dim/age0", "none/dim")
+    # with nothing in view, only the frames every camera is judged count (idle cameras: every 15th)
+    idle = frames(30, area_fraction=np.where(np.arange(30) % 15 == 0, 0.0, 0.08))
+    assert fit_sensor_model(rows(0), idle, camera_hours=1.0, idle_frame_stride=15).area_fraction["none/dim"] == [0.0, 0.0]
     assert background_age_bin(1.0) == 0 and background_age_bin(1 / 32) == 1 and background_age_bin(1 / 500) == 2
 
 
