@@ -70,12 +70,16 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 11
+MODEL_VERSION = 12
 #: The shares of the frame a threshold baseline triggers at (the paper's 5 % and 0.5 %): the
 #: persistence of a big foreground region is fitted on how long it stays above these.
 PERSISTENCE_FRACTIONS = (0.05, 0.005)
 #: The persistence is capped below 1 so a drawn episode always ends.
 MAX_AREA_PERSISTENCE = 0.99
+#: Seconds since a lamp in a camera's far view changed level: the bins of recent changes (under
+#: 5 s, 5-20 s); older changes count as none (calibration: 2 % of the frames with nothing in view
+#: held a region over 0.5 % of the frame 20-40 s after the change, as without one).
+FAR_CHANGE_EDGES_S = (5.0, 20.0)
 #: The record columns (``citysim.fast.records``) the track-level fit reads in place of the frame-level ones.
 TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "hit_ahead_m": "track_hit_ahead_m", "fa": "track_fa",
                  "fa_distance_m": "track_fa_distance_m", "fa_box": "track_fa_box", "fa_class": "track_fa_class"}
@@ -115,15 +119,25 @@ def scalar_bin_of(value: float, edges: tuple[float, ...]) -> int:
     return min(max(bisect.bisect_right(edges, value) - 1, 0), len(edges) - 1)
 
 
-def threshold_conditions(kind: int, forward_m: float, lit: bool, age_bin: int) -> tuple[str, ...]:
+def threshold_conditions(kind: int, forward_m: float, lit: bool, age_bin: int,
+                         far_change_age_s: float = math.inf) -> tuple[str, ...]:  # fmt: skip
     """The keys of the threshold samples of a frame, finest first (fast mode takes the first one
-    calibration saw): the subject (nothing in view, or the nearest candidate's kind and distance
-    bin), the camera's own lamp lit or dim, the background's age bin; then without the age; then,
-    for a candidate, without the light. The light matters: in calibration a walker made a region
-    over 0.5 % of the frame in 15 % of the frames under a lit lamp and in none under a dim one."""
-    subject = "none" if kind < 0 else f"{KINDS[kind]}/{scalar_bin_of(forward_m, DISTANCE_EDGES_M)}"
-    lit_key = f"{subject}/{'lit' if lit else 'dim'}"
-    return (f"{lit_key}/age{age_bin}", lit_key) + ((subject,) if kind >= 0 else ())
+    calibration saw): the subject (the nearest candidate's kind and distance bin, or nothing in
+    view, split by how long ago a lamp in the camera's far view changed level, ``FAR_CHANGE_EDGES_S``),
+    the camera's own lamp lit or dim, the background's age bin; then without the age; then, for a
+    candidate, without the light, and for a recent far change, nothing in view's keys. The light
+    matters: in calibration a walker made a region over 0.5 % of the frame in 15 % of the frames
+    under a lit lamp and in none under a dim one; so does a far lamp switching (its pool changes
+    the top of the frame; see ``citysim.fast.geometry.LevelChanges``)."""
+    own = "lit" if lit else "dim"
+    if kind >= 0:
+        subject = f"{KINDS[kind]}/{scalar_bin_of(forward_m, DISTANCE_EDGES_M)}"
+        return f"{subject}/{own}/age{age_bin}", f"{subject}/{own}", subject
+    keys = (f"none/{own}/age{age_bin}", f"none/{own}")
+    if far_change_age_s >= FAR_CHANGE_EDGES_S[-1]:
+        return keys
+    far = f"none/far{bisect.bisect_right(FAR_CHANGE_EDGES_S, far_change_age_s)}"
+    return (f"{far}/{own}/age{age_bin}", f"{far}/{own}") + keys
 
 
 def nearest_in_view(kinds: np.ndarray, forward_m: np.ndarray, beam_forward_m: np.ndarray) -> tuple[int, float]:
@@ -286,12 +300,15 @@ def fit_area_fractions(frames: dict[str, np.ndarray], idle_frame_stride: int = 1
     frame, 0.4 % of the frames every camera is judged)."""
     by_key: dict[str, list[float]] = {}
     stride = max(1, int(idle_frame_stride))
-    for k, d, lit, age, frac, f in zip(frames["near_kind"], frames["near_forward_m"], frames["light"],
-                                       frames["age_bin"], frames["area_fraction"].tolist(), frames["frame"],
-                                       strict=True):  # fmt: skip
+    far_change = frames["far_change_s"] if "far_change_s" in frames else np.full(len(frames["frame"]), np.inf)
+    for k, d, lit, age, frac, f, far_s in zip(frames["near_kind"], frames["near_forward_m"], frames["light"],
+                                              frames["age_bin"], frames["area_fraction"].tolist(), frames["frame"],
+                                              far_change.tolist(), strict=True):  # fmt: skip
         if k < 0 and f % stride:
             continue
-        for key in threshold_conditions(int(k), float(d), bool(lit >= LIT_LEVEL), int(age)):
+        keys = threshold_conditions(int(k), float(d), bool(lit >= LIT_LEVEL), int(age), far_s)
+        # a frame counts under its own keys only: a recent far change's fallbacks are the frames without one
+        for key in keys[:2] if k < 0 and len(keys) > 2 else keys:
             by_key.setdefault(key, []).append(frac)
     return {key: _capped(np.array(v)) for key, v in sorted(by_key.items())}
 

@@ -18,8 +18,14 @@ from collections.abc import Sequence
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
-from citysim.fast.geometry import CameraGeometry, beam_id, beam_x_m
-from citysim.fast.model import BEAM, KINDS, YOUNG_FRAMES, background_age_bin, nearest_in_view
+from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
+from citysim.fast.model import (
+    BEAM,
+    KINDS,
+    YOUNG_FRAMES,
+    background_age_bin,
+    nearest_in_view,
+)
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.world.agents import AgentState
@@ -37,7 +43,7 @@ ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad
                "hit", "det_class", "track_hit", "track_det_class", "hit_ahead_m", "track_hit_ahead_m")  # fmt: skip
 FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
                  "regions", "near_kind", "near_forward_m", "area_fraction", "age_bin",
-                 "track_fa", "track_fa_distance_m", "track_fa_box", "track_fa_class")  # fmt: skip
+                 "track_fa", "track_fa_distance_m", "track_fa_box", "track_fa_class", "far_change_s")  # fmt: skip
 
 
 def is_young(learning_rate: float | None) -> bool:
@@ -110,11 +116,13 @@ class CalibrationRecorder(Collector):
         self.frames: dict[str, list] = {c: [] for c in FRAME_COLUMNS}
         self.agents: list[AgentState] = []
         self.levels = np.zeros(geometry.n)
+        self.changes = LevelChanges(geometry)
         self._placed = None
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
         self.agents = list(agents)
         self.levels = np.asarray(levels, dtype=np.float64).copy()
+        self.changes.update(t_s, self.levels)
         self._placed = None
 
     def _candidates(self):
@@ -156,7 +164,8 @@ class CalibrationRecorder(Collector):
                                                     cand.beam_forward_m[beams, lamp_index])  # fmt: skip
         values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, *_fa_values(fa),
                   len(recorded.inner.last_regions) > 0, near_kind, near_forward_m, recorded.last_area_fraction,
-                  background_age_bin(recorded.last_rate), *_fa_values(track_fa))  # fmt: skip
+                  background_age_bin(recorded.last_rate), *_fa_values(track_fa),
+                  self.changes.far_change_age_s(lamp_index, t_s))  # fmt: skip
         for col, value in zip(FRAME_COLUMNS, values, strict=True):
             self.frames[col].append(value)
 

@@ -14,13 +14,14 @@ judged, so a seed gives the same detections bit for bit.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
-from citysim.fast.geometry import CameraGeometry, beam_id, beam_x_m
+from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
     BEAM,
     KINDS,
@@ -94,6 +95,7 @@ class FastSensors:
         self.frame_k = -1
         self.agents: list = []
         self.levels = np.zeros(self.geometry.n)
+        self.changes = LevelChanges(self.geometry)
         self.cand = self.geometry.candidates([])
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
@@ -117,6 +119,7 @@ class FastSensors:
             self._of_camera = [None] * self.geometry.n
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
+        self.changes.update(frame_k / self.fps, levels)
         xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
         self.light = self.geometry.light_at(xs, levels) if len(agents) else xs
         self._lit_cells = None
@@ -355,7 +358,8 @@ class SensedSegmenter(_LearningRate):
         idx = s.candidates_of(i)
         kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
                                           s.cand.forward_m[idx, i], s.cand.beam_forward_m[s.beams_of(i), i])
-        conditions = threshold_conditions(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate))
+        far_s = s.changes.far_change_age_s(i, s.frame_k / s.fps) if kind < 0 else math.inf
+        conditions = threshold_conditions(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate), far_s)
         samples = next((s.area_samples[c] for c in conditions if c in s.area_samples), None)
         # the frame's rank among its condition's (sorted) samples: kept from the last judged frame
         # with the model's persistence, so a big region lasts an episode as in the real frames

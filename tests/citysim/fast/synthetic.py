@@ -31,7 +31,7 @@ def frames(n: int = 0, **columns) -> dict[str, np.ndarray]:
     defaults = {"camera": 0, "frame": np.arange(n), "light": 0.2, "has_candidates": False, "fa": False,
                 "fa_distance_m": 15.0, "fa_box": None, "fa_class": 1, "regions": False, "near_kind": -1,
                 "near_forward_m": np.nan, "area_fraction": 0.0, "age_bin": 2, "track_fa": False,
-                "track_fa_distance_m": 15.0, "track_fa_box": None, "track_fa_class": 1}  # fmt: skip
+                "track_fa_distance_m": 15.0, "track_fa_box": None, "track_fa_class": 1, "far_change_s": np.inf}  # fmt: skip
     out = {}
     for col in FRAME_COLUMNS:
         if col in ("fa_box", "track_fa_box"):

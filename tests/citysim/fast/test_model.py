@@ -82,6 +82,14 @@ def test_detected_classes_and_threshold_areas_come_from_their_frames():
     assert model.area_fraction["vehicle/2"] == [0.08, 0.06]  # a candidate's key without the light too
     assert threshold_conditions(CAR, 9.0, True, 2) == ("vehicle/2/lit/age2", "vehicle/2/lit", "vehicle/2")
     assert threshold_conditions(-1, np.nan, False, 0) == ("none/dim/age0", "none/dim")
+    # nothing in view 3 s after a far lamp changed level: that bin's samples first, then nothing in view's
+    assert threshold_conditions(-1, np.nan, False, 2, far_change_age_s=3.0) == ("none/far0/dim/age2", "none/far0/dim",
+                                                                                 "none/dim/age2", "none/dim")
+    assert threshold_conditions(-1, np.nan, False, 2, far_change_age_s=12.0)[0] == "none/far1/dim/age2"
+    assert threshold_conditions(-1, np.nan, False, 2, far_change_age_s=30.0) == ("none/dim/age2", "none/dim")
+    far = frames(4, area_fraction=[0.0, 0.0, 0.02, 0.03], far_change_s=[np.inf, 45.0, 1.0, 2.0])
+    far_model = fit_sensor_model(rows(0), far, camera_hours=1.0)
+    assert far_model.area_fraction["none/dim"] == [0.0, 0.0] and far_model.area_fraction["none/far0/dim"] == [0.02, 0.03]
     # with nothing in view, only the frames every camera is judged count (idle cameras: every 15th)
     idle = frames(30, area_fraction=np.where(np.arange(30) % 15 == 0, 0.0, 0.08))
     assert fit_sensor_model(rows(0), idle, camera_hours=1.0, idle_frame_stride=15).area_fraction["none/dim"] == [0.0, 0.0]

@@ -7,7 +7,7 @@ import pytest
 
 from citysim.config.kinds import DETECTOR_CLASSES
 from citysim.config.scenario import scenario_from_mapping
-from citysim.fast.geometry import BEAM_AHEAD_M, CameraGeometry, beam_id
+from citysim.fast.geometry import BEAM_AHEAD_M, CameraGeometry, LevelChanges, beam_id
 from citysim.fast.records import CalibrationRecorder, RecordingSensors
 from citysim.world.agents import AgentState
 from citysim.world.street import build_street
@@ -93,3 +93,17 @@ def test_a_lit_road_user_behind_the_camera_is_a_beam_candidate_standing_where_it
     assert abs(x + w / 2 - u) <= 1.0 and abs(y + h - v) <= 1.0
     seen_car = geometry.candidates([agent(4, x0 + 12.0, -1.6, "vehicle", light_on=True)])
     assert seen_car.seen[0, 0] and not seen_car.beam_seen[0, 0]  # a candidate's light is its own
+
+
+def test_a_camera_watches_when_the_far_lamps_ahead_of_it_beyond_its_neighbours_change():
+    # three lamps 30 m apart, every camera looking along +x: only the first sees a lamp 2 poles ahead
+    geometry = CameraGeometry(build_street(scenario_from_mapping(tiny_scenario())))
+    assert [far.tolist() for far in geometry.far_lamps] == [[2], [], []]
+    changes = LevelChanges(geometry)
+    changes.update(0.0, np.array([0.2, 0.2, 0.2]))
+    assert changes.far_change_age_s(0, 5.0) == np.inf  # never seen to change
+    changes.update(10.0, np.array([1.0, 1.0, 0.2]))  # its own and its neighbour's do not count
+    assert changes.far_change_age_s(0, 12.0) == np.inf
+    changes.update(20.0, np.array([1.0, 1.0, 0.6]))
+    assert changes.far_change_age_s(0, 23.5) == pytest.approx(3.5)
+    assert changes.far_change_age_s(2, 23.5) == np.inf  # nothing ahead of the last camera
