@@ -38,6 +38,7 @@ from detector.tracks.plausibility import (
     PlausibilityLimits,
     note_acceleration,
     note_heading,
+    note_jump,
     reject_reason,
 )
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
@@ -240,6 +241,7 @@ class TrackSet:
 
     def _judge(self, track: Track) -> None:
         note_acceleration(track, self.limits)
+        note_jump(track, self.limits)
         note_heading(track, self.limits)
         speed = track.speed_mps
         if speed is not None and speed < self.limits.still_mps:
