@@ -185,8 +185,10 @@ class Track:
     target_classes: dict = field(default_factory=dict)
     reasons: dict = field(default_factory=dict)
     merged_into: int | None = None
-    #: the last frame the track's ground speed was under the still limit (None: never)
+    #: the last frame the track's ground speed was under the still limit, and the last its box
+    #: reached the frame's bottom edge (``TrackSet``; None: never)
     still_frame: int | None = None
+    exit_frame: int | None = None
 
     def __post_init__(self) -> None:
         if self.typical_size_px == (0.0, 0.0):  # until the first frame is noted: the given box
