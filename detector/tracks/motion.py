@@ -33,7 +33,9 @@ car itself, and the spot on the road ahead of it is no second road user (on the 
 such spots of cars still out of range were five of the noise tracks called target). Such a track
 is a target even when it was rejected as 'size outside Table 1', 'classified noise', 'erratic'
 (``OVERRIDDEN_REASONS``: 'erratic' because the acceleration test differentiates those same jumpy
-velocities; the fit is the stricter test of a steady motion) or, faster than ``vehicle_above_mps``
+velocities; the fit is the stricter test of a steady motion), 'jumping' (a car broken into
+fragments can jump half their small boxes a frame yet keep a car's straight steady path, which
+an insect's jumps never draw) or, faster than ``vehicle_above_mps``
 only (``VEHICLE_ONLY_REASONS``), 'too wide for its heading': a car's spot going away is as wide as
 that, but a spot that wide at a cyclist's speed is a cyclist's lamp's light, not a car (scene C:
 four such tracks at 5-7 m/s). 'too few frames', 'too fast' and 'size unsteady' still reject. Its class
@@ -53,7 +55,9 @@ from detector.tracks.ground import line_of_sight_cos
 from detector.tracks.track import Track, median
 
 #: The rejections a steady vehicle-like motion outweighs (see the module docstring).
-OVERRIDDEN_REASONS = frozenset({"size outside Table 1", "classified noise", "erratic", "too wide for its heading"})
+OVERRIDDEN_REASONS = frozenset(
+    {"size outside Table 1", "classified noise", "erratic", "jumping", "too wide for its heading"}
+)
 #: Overridden only for a track at a vehicle's speed (above ``vehicle_above_mps``; module docstring).
 VEHICLE_ONLY_REASONS = frozenset({"too wide for its heading"})
 

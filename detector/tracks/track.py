@@ -44,6 +44,16 @@ ACCEL_FRAMES = 15
 SWAY_FRAMES = 30
 #: Frames of ground positions kept for the vehicle-motion test (``detector.tracks.motion``).
 PATH_FRAMES = 30
+#: A track unseen for longer than this is only still kept because it had stopped
+#: (``TrackSet``'s still hold, up to 10 s): its box and ground point are predicted where it
+#: stood, not carried on by the velocities of its last steps for seconds (on suburban_night at
+#: 02:00 a walker leaving the view under the pole, his box bottom pinned to the frame's edge,
+#: was carried 35 px across the image in 41 frames and an insect there took his track over).
+#: The tracker's default ``max_missed_frames`` (5) plus the frame being predicted.
+MAX_COAST_FRAMES = 6
+#: Boxes are taken at least this wide and tall when their shift is measured (a pixel's jitter
+#: of a box of a few pixels is no jump).
+MIN_SHIFT_BOX_PX = 4.0
 #: Probabilities are floored here before the logarithm (a 0 would veto a class for good).
 _P_FLOOR = 1e-4
 POOLINGS = ("mean_log", "mean", "last")
@@ -71,6 +81,22 @@ def median(values) -> float:
     ordered = sorted(values)
     n = len(ordered)
     return ordered[n // 2] if n % 2 else (ordered[n // 2 - 1] + ordered[n // 2]) / 2
+
+
+def box_shift_share(before_px, after_px, frames: int) -> float:
+    """How far a box's centre moved per frame between two boxes ``frames`` apart, in shares of
+    the larger box's size on each axis (Euclidean over both axes).
+
+    The larger box: a body whose legs were lost for a frame, or joined with a fragment, changes
+    size and moves its centre by at most half the change, which this keeps under 0.5.
+    """
+    ox, oy, ow, oh = before_px
+    x, y, w, h = after_px
+    wide = max(w, ow, MIN_SHIFT_BOX_PX)
+    tall = max(h, oh, MIN_SHIFT_BOX_PX)
+    dx = (x + w / 2) - (ox + ow / 2)
+    dy = (y + h / 2) - (oy + oh / 2)
+    return math.hypot(dx / wide, dy / tall) / max(frames, 1)
 
 
 def _median_halves_velocity(positions, fps: float, min_span_frames: float) -> tuple[float, float] | None:
@@ -133,6 +159,15 @@ class Track:
     window_log_sums: list[float] = field(default_factory=list)
     #: frames (within the acceleration window) whose acceleration exceeded the bound
     accel_violations: deque = field(default_factory=lambda: deque(maxlen=ACCEL_FRAMES))
+    #: how far the box centre moved since the last sighting, per frame, in shares of the box's
+    #: size (``box_shift_share``; None on the first frame); how far the box is from the one of
+    #: the sighting before (as if one frame apart; None until there is one): near it, the last
+    #: box was an excursion (another region taken for one frame) and this is the return; and the
+    #: frames (within the acceleration window) that were jumps (``plausibility.note_jump``)
+    shift_share: float | None = None
+    return_share: float | None = None
+    prior_box_px: list | None = None
+    box_jumps: deque = field(default_factory=lambda: deque(maxlen=ACCEL_FRAMES))
     #: frames judged moving faster than walkers along the line of sight, and of those the frames
     #: too wide for it (``detector.tracks.plausibility.note_heading``)
     head_on_frames: int = 0
@@ -150,8 +185,10 @@ class Track:
     target_classes: dict = field(default_factory=dict)
     reasons: dict = field(default_factory=dict)
     merged_into: int | None = None
-    #: the last frame the track's ground speed was under the still limit (None: never)
+    #: the last frame the track's ground speed was under the still limit, and the last its box
+    #: reached the frame's bottom edge (``TrackSet``; None: never)
     still_frame: int | None = None
+    exit_frame: int | None = None
 
     def __post_init__(self) -> None:
         if self.typical_size_px == (0.0, 0.0):  # until the first frame is noted: the given box
@@ -185,7 +222,7 @@ class Track:
         """
         x, y, w, h = self.box_px
         vx, vy = self.image_velocity_px
-        steps = self.missed + 1
+        steps = min(self.missed + 1, MAX_COAST_FRAMES)
         tw, th = self.typical_size_px
         tw, th = max(tw, w), max(th, h)
         cx, bottom = x + w / 2 + vx * steps, y + h + vy * steps
@@ -195,7 +232,7 @@ class Track:
         """(forward_m, right_m) at ``frame`` at the track's ground velocity (its last position if unknown)."""
         if self.velocity_mps is None:
             return self.forward_m, self.right_m
-        dt_s = (frame - self.last_frame) / self.fps
+        dt_s = min(frame - self.last_frame, MAX_COAST_FRAMES) / self.fps
         return self.forward_m + self.velocity_mps[0] * dt_s, self.right_m + self.velocity_mps[1] * dt_s
 
     def observe(self, frame: int, box_px, ground, features, probabilities, smoothing: float = 0.5) -> None:
@@ -205,6 +242,10 @@ class Track:
         steps = max(frame - self.last_frame, 1)
         sx = ((x + w / 2) - (ox + ow / 2)) / steps  # of the bottom centre (see predicted_box)
         sy = ((y + h) - (oy + oh)) / steps
+        self.shift_share = box_shift_share(self.box_px, box_px, steps)
+        prior = self.prior_box_px
+        self.return_share = None if prior is None else box_shift_share(prior, box_px, 1)
+        self.prior_box_px = self.box_px
         if self.sightings == 1:
             self.image_velocity_px = (sx, sy)
         else:

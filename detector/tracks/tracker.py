@@ -18,7 +18,12 @@ Tracks unseen for more than ``max_missed_frames`` frames end, except a target th
 stopped (ground speed under the plausibility limits' ``still_mps``): background subtraction
 absorbs a still object in a few seconds (MOG2 takes a new colour as background once it holds
 a tenth of its weight: about 3.5 s at the default history), so such a track is kept for
-``still_hold_s`` and the person who stood and walks on keeps the id. With ``keep_ended`` they are
+``still_hold_s`` and the person who stood and walks on keeps the id. Not a track whose box reached
+the frame's bottom edge within that second (``EXIT_MARGIN_PX``): its ground point stalls because
+its feet left the view under the camera, not because it stopped, and a track held there was
+taken over by whatever next moved at the edge (on suburban_night at 02:00 insects, lit by the
+emitter right below it, four times in 300 s on two seeds, each one a target from its first frame
+with the walker's history, and lamps lit for them). With ``keep_ended`` they are
 kept in ``ended`` (for a video's tracks.csv; a simulation leaves it off so memory stays
 bounded). Track ids are ints from 1, never reused. The last ``confirm_n`` target decisions of
 each track are kept as bits for k-of-n confirmation (``is_confirmed``).
@@ -38,11 +43,16 @@ from detector.tracks.plausibility import (
     PlausibilityLimits,
     note_acceleration,
     note_heading,
+    note_jump,
     reject_reason,
 )
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
 from detector.tracks.track import POOLINGS, Track
 
+#: A box whose bottom is this close to the frame's last row reaches the frame's bottom edge (the
+#: mask's opening trims the rows at the border: walkers leaving suburban_night's view under the
+#: pole ended at rows 237-239 of 240).
+EXIT_MARGIN_PX = 3
 _DEFAULT_LIMITS = PlausibilityLimits()
 _DEFAULT_MOTION = MotionLimits()
 _DEFAULT_GATES = Gates()
@@ -105,6 +115,7 @@ class TrackSet:
         if not 1 <= confirm_k <= confirm_n:
             raise ValueError(f"TrackSet: need 1 <= confirm_k <= confirm_n, got k={confirm_k}, n={confirm_n}")
         self.fps = camera.fps
+        self.exit_row_px = camera.height_px - EXIT_MARGIN_PX
         self.geometry = RegionGeometry(camera) if geometry is None else geometry
         self.ground = GroundProjector(camera, self.geometry)
         self.class_names = list(class_names)
@@ -234,16 +245,22 @@ class TrackSet:
     def _missed_limit(self, track: Track) -> int:
         """Frames a track may go unseen: longer for a target that stood still (see the module docstring)."""
         # the fading region of an absorbed still body moves its box: "stood" means within a second
-        if track.target_frames and track.still_frame is not None and track.last_frame - track.still_frame <= self.fps:
-            return self.still_hold_frames
-        return self.max_missed_frames
+        last, fps = track.last_frame, self.fps
+        stood = track.target_frames and track.still_frame is not None and last - track.still_frame <= fps
+        # stalled at the bottom edge is leaving the view under the camera, not standing
+        left = track.exit_frame is not None and last - track.exit_frame <= fps
+        return self.still_hold_frames if stood and not left else self.max_missed_frames
 
     def _judge(self, track: Track) -> None:
         note_acceleration(track, self.limits)
+        note_jump(track, self.limits)
         note_heading(track, self.limits)
         speed = track.speed_mps
         if speed is not None and speed < self.limits.still_mps:
             track.still_frame = track.last_frame
+        _, y, _, h = track.box_px
+        if y + h >= self.exit_row_px:
+            track.exit_frame = track.last_frame
         track.pooled = pooled = track.pooled_probabilities(self.pooling)
         track.p_target = 1.0 - pooled[self.noise_col]
         noise, sums = self.noise_col, track.log_sums
