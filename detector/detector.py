@@ -43,11 +43,12 @@ from detector.camera import CameraModel
 from detector.classifier import DimensionalClassifier
 from detector.confirm import Tracker
 from detector.divide import DivisionParams, divide_rows
-from detector.fast_proba import camera_rows_proba, numpy_predict_proba
+from detector.fast_proba import camera_rows_proba, compiled_rows_proba, numpy_predict_proba
 from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
 from detector.general_model import default_model
 from detector.roi import Crop, full_frame, range_crop
 from detector.segment import Regions, Segmenter, SegmenterParams
+from detector.split_compiled import load as load_compiled_splits
 from detector.tracks.tracker import TrackSet
 
 __all__ = ["Detection", "Detector", "numpy_predict_proba"]
@@ -140,11 +141,16 @@ class Detector:
         self._class_names = [str(c) for c in classes]
         self._noise_col = int(np.flatnonzero(classes == "noise")[0])
         self._predict_proba = numpy_predict_proba(self.model, camera) or self._sklearn_predict_proba
-        # the few regions of a usual frame: plain Python (None if the model is another kind)
-        self._proba_rows = camera_rows_proba(self.model, camera)
+        # the few regions of a usual frame: the plain Python rows' arithmetic, compiled where that
+        # gives the same values bit for bit (None if the model is another kind)
+        proba_rows = camera_rows_proba(self.model, camera)
+        self._rows_proba = compiled_rows_proba(proba_rows, camera)
+        if self._rows_proba is None and proba_rows is not None:
+            self._rows_proba = lambda feats: np.array(proba_rows(feats.tolist()))
         self.max_distance_m = float(max_distance_m)
         self.target_threshold = float(target_threshold)
         self.division = division
+        load_compiled_splits(division)
         self.crop: Crop = (
             range_crop(
                 camera,
@@ -214,15 +220,17 @@ class Detector:
                 f"camera's height_px x width_px), got {got}"
             )
 
-    def _classify(self, rows: list, feats: np.ndarray) -> tuple[np.ndarray, list[float], list[int]]:
-        """(probabilities (N, 5), P(target) per region, most probable class index per region)."""
-        if self._proba_rows is not None and len(rows) <= SCALAR_MAX_REGIONS:
-            proba_rows = self._proba_rows(rows)
+    def _classify(self, feats: np.ndarray) -> tuple[np.ndarray, list[list[float]], list[float], list[int]]:
+        """(probabilities (N, 5), the same as lists, P(target) per region, most probable class index
+        per region)."""
+        if self._rows_proba is not None and len(feats) <= SCALAR_MAX_REGIONS:
+            proba = self._rows_proba(feats)
+            lists = proba.tolist()
             noise = self._noise_col
             # the first maximum, as argmax
-            return np.array(proba_rows), [1.0 - p[noise] for p in proba_rows], [p.index(max(p)) for p in proba_rows]
+            return proba, lists, [1.0 - p[noise] for p in lists], [p.index(max(p)) for p in lists]
         proba = self._predict_proba(feats)
-        return proba, (1.0 - proba[:, self._noise_col]).tolist(), proba.argmax(axis=1).tolist()
+        return proba, proba.tolist(), (1.0 - proba[:, self._noise_col]).tolist(), proba.argmax(axis=1).tolist()
 
     def process(self, gray: np.ndarray, learning_rate: float | None = None) -> list[Detection]:
         """Detect and classify the moving objects of one uint8 (H, W) frame.
@@ -270,10 +278,10 @@ class Detector:
             prepared = self.tracks.prepare(boxes, [areas[j] for j in keep], rows)
             boxes, rows = prepared.boxes_px, prepared.rows
         feats = np.array(rows)
-        proba, p_target, labels = self._classify(rows, feats)
+        proba, proba_lists, p_target, labels = self._classify(feats)
         names = self._class_names
         if self.tracks is not None:
-            views = self.tracks.update(prepared, proba.tolist())
+            views = self.tracks.update(prepared, proba_lists)
             return [
                 Detection(
                     box_px=tuple(box), features=feats[j], cls=names[labels[j]], probabilities=proba[j],
