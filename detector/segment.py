@@ -266,8 +266,9 @@ class Segmenter:
         # 1-2 us where counting them all takes 3-4 us, measured on the suburban band)
         if not cv2.hasNonZero(fg):
             return Regions(_NO_BOXES, _NO_AREAS, [], _NO_FLAGS, 0.0, self._mask, _NO_FLAGS)
-        cv2.erode(fg, self._kernel, dst=fg)
-        cv2.dilate(fg, self._kernel, dst=fg)
+        # one call for the opening (OpenCV's erosion then dilation): every call after MOG2 has
+        # walked the caches costs several microseconds (measured: ~1 % of the detector's frame)
+        cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._kernel, dst=fg)
         foreground_fraction = cv2.countNonZero(fg) / self._crop_px
         if p.dilate_iterations > 0:
             cv2.dilate(fg, self._kernel, dst=fg, iterations=p.dilate_iterations)
