@@ -300,11 +300,13 @@ class Detector:
         feats = np.array(rows)
         proba, proba_lists, p_target, labels = self._classify(feats)
         names = self._class_names
+        # the detections' rows of both arrays in one call each, not one indexing per detection
+        feat_rows, probability_rows = list(feats), list(proba)
         if self.tracks is not None:
             views = self.tracks.update(prepared, proba_lists)
             return [
                 _detection({
-                    "box_px": tuple(box), "features": feats[j], "cls": names[labels[j]], "probabilities": proba[j],
+                    "box_px": tuple(box), "features": feat_rows[j], "cls": names[labels[j]], "probabilities": probability_rows[j],
                     "p_target": p_target[j], "track_id": v.track_id, "track_cls": v.cls,
                     "track_p_target": v.p_target, "track_target": v.target, "track_reason": v.reason,
                     "ground_x_m": v.ground_x_m, "ground_y_m": v.ground_y_m, "velocity_x_mps": v.velocity_x_mps,
@@ -316,7 +318,7 @@ class Detector:
         ids = self.tracker.update_rows(boxes, [p >= threshold for p in p_target])
         return [
             _detection({
-                "box_px": tuple(box), "features": feats[j], "cls": names[labels[j]], "probabilities": proba[j],
+                "box_px": tuple(box), "features": feat_rows[j], "cls": names[labels[j]], "probabilities": probability_rows[j],
                 "p_target": p_target[j], "track_id": ids[j], **_NO_TRACK_FIELDS,
             })  # fmt: skip
             for j, box in enumerate(boxes)

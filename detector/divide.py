@@ -67,17 +67,19 @@ SPLITTERS = (
 
 
 def _part_box_and_area(part: np.ndarray, x0: int, y0: int) -> tuple[list[int], float] | None:
-    """Frame box [x, y, w, h] and Green's-theorem area of a part mask cut from a box at (x0, y0)."""
-    contours, _ = cv2.findContours(part.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    """Frame box [x, y, w, h] and Green's-theorem area of a part mask cut from a box at (x0, y0).
+
+    The box is the mask's own (``cv2.boundingRect`` of its set pixels): the union of its external
+    contours' boxes, as every set pixel lies within one of them and each contour's extreme points
+    are set pixels (one call rather than one per contour; tests/detector/test_split_compiled.py).
+    """
+    mask = part.view(np.uint8)
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     if not contours:
         return None
-    rects = [cv2.boundingRect(c) for c in contours]
-    left = min(r[0] for r in rects)
-    top = min(r[1] for r in rects)
-    right = max(r[0] + r[2] for r in rects)
-    bottom = max(r[1] + r[3] for r in rects)
+    left, top, width, height = cv2.boundingRect(mask)
     area = sum(cv2.contourArea(c) for c in contours)
-    return [x0 + left, y0 + top, right - left, bottom - top], float(area)
+    return [x0 + left, y0 + top, width, height], float(area)
 
 
 def _ratio(num: float, den: float) -> float:

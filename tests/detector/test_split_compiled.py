@@ -68,3 +68,23 @@ def test_compiled_splits_refuse_small_and_empty_masks():
         assert split_compiled.split_object_and_spot(roi) is None
         assert split_compiled.split_at_widening(roi) is None
     assert split_compiled.split_at_widening(np.ones((40, 20), np.uint8)) is None
+
+
+def test_a_parts_box_is_the_union_of_its_external_contours_boxes():
+    # divide._part_box_and_area takes the mask's own box: the union of its contours' boxes
+    from detector.divide import _part_box_and_area
+
+    rng = np.random.default_rng(8)
+    n_parts = 0
+    for _ in range(1500):
+        parts = split.split_object_and_spot(filled_region(rng).view(bool)) or ()
+        for part in parts:
+            contours, _ = cv2.findContours(part.view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+            rects = np.array([cv2.boundingRect(c) for c in contours])
+            left, top = rects[:, :2].min(axis=0)
+            right, bottom = (rects[:, :2] + rects[:, 2:]).max(axis=0)
+            box, area = _part_box_and_area(part, 3, 5)
+            assert box == [3 + left, 5 + top, right - left, bottom - top]
+            assert area == sum(cv2.contourArea(c) for c in contours)
+            n_parts += 1
+    assert n_parts > 500
