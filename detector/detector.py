@@ -185,7 +185,7 @@ class Detector:
         self.segmenter = Segmenter(params, camera.fps, self.crop)
         # per-camera constants, computed once rather than every frame
         self._frame_shape = (camera.height_px, camera.width_px)
-        self._geometry = RegionGeometry(camera)
+        self._geometry = RegionGeometry(camera, compiled=True)
         # without lens distortion an object divided off a region beyond range is beyond it too
         # (its bottom row is at or above the region's): such regions are not tried
         self._divide_within_m = math.inf if camera.has_distortion else self.max_distance_m

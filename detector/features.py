@@ -47,7 +47,7 @@ class RegionGeometry:
     contour areas px, features in ``FEATURE_NAMES`` order and units.
     """
 
-    def __init__(self, camera: CameraModel) -> None:
+    def __init__(self, camera: CameraModel, *, compiled: bool = False) -> None:
         self.camera = camera
         self.tilt_deg = camera.tilt_deg
         self.height_m = camera.height_m
@@ -58,14 +58,17 @@ class RegionGeometry:
         self.cos_tilt = float(np.cos(theta))
         self.fx_px, self.fy_px, self.cy_px = camera.fx_px, camera.fy_px, camera.cy_px
         self.distorted = camera.has_distortion
-        # OpenCV's values, compiled where they are OpenCV's on every pixel a region can give
-        # (``detector.undistort``; a few microseconds less per call, several calls a frame)
+        # ``compiled`` (a detector's, used every frame): OpenCV's values, compiled where they are
+        # OpenCV's on every pixel a region can give (``detector.undistort``; a few microseconds
+        # less per call, several calls a frame; checking a camera takes ~0.1 s, once per process,
+        # so one-off geometries, as training's many cameras, keep OpenCV)
         self._undistort = None
         lens = None
         if self.distorted:
             intrinsic, distortion = camera.intrinsic_matrix, camera.distortion
             size_px = (camera.width_px, camera.height_px)
-            self._undistort = compiled_undistortion(intrinsic, distortion, *size_px)
+            if compiled:
+                self._undistort = compiled_undistortion(intrinsic, distortion, *size_px)
             if self._undistort is not None:
                 lens = lens_constants(intrinsic, distortion, *size_px)
             else:
