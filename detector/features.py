@@ -25,10 +25,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-import cv2
 import numpy as np
 
 from detector.camera import CameraModel
+from detector.features_compiled import feature_rows
+from detector.undistort import compiled_undistortion, lens_constants, opencv_undistortion
 
 FEATURE_NAMES = ("width_m", "height_m", "area_m2", "distance_m", "tilt_deg", "camera_height_m")
 N_FEATURES = len(FEATURE_NAMES)
@@ -37,8 +38,6 @@ N_FEATURES = len(FEATURE_NAMES)
 SCALAR_MAX_REGIONS = 16
 # rows whose depression is at or below this have no ground point (as CameraModel.forward_distance_m)
 _MIN_DEPRESSION_RAD = 1e-9
-# CameraModel.undistort_pixels's criterion (checked equal by the tests)
-_UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)
 
 
 class RegionGeometry:
@@ -48,7 +47,7 @@ class RegionGeometry:
     contour areas px, features in ``FEATURE_NAMES`` order and units.
     """
 
-    def __init__(self, camera: CameraModel) -> None:
+    def __init__(self, camera: CameraModel, *, compiled: bool = False) -> None:
         self.camera = camera
         self.tilt_deg = camera.tilt_deg
         self.height_m = camera.height_m
@@ -59,24 +58,38 @@ class RegionGeometry:
         self.cos_tilt = float(np.cos(theta))
         self.fx_px, self.fy_px, self.cy_px = camera.fx_px, camera.fy_px, camera.cy_px
         self.distorted = camera.has_distortion
-        self._intrinsic = camera.intrinsic_matrix
-        self._distortion = camera.distortion
-        self._identity = np.eye(3)  # the rectification of undistortPointsIter, made once
+        # ``compiled`` (a detector's, used every frame): OpenCV's values, compiled where they are
+        # OpenCV's on every pixel a region can give (``detector.undistort``; a few microseconds
+        # less per call, several calls a frame; checking a camera takes ~0.1 s, once per process,
+        # so one-off geometries, as training's many cameras, keep OpenCV)
+        self._undistort = None
+        lens = None
+        if self.distorted:
+            intrinsic, distortion = camera.intrinsic_matrix, camera.distortion
+            size_px = (camera.width_px, camera.height_px)
+            if compiled:
+                self._undistort = compiled_undistortion(intrinsic, distortion, *size_px)
+            if self._undistort is not None:
+                lens = lens_constants(intrinsic, distortion, *size_px)
+            else:
+                self._undistort = opencv_undistortion(intrinsic, distortion)
+        # rows' plain Python compiled for a distorted lens (detector.features_compiled), where it
+        # gives the same rows; without distortion the plain rows are faster (measured)
+        self._compiled = None
+        if lens is not None:
+            coefs, *scalars, half_grid = lens
+            camera_constants = (self.tilt_rad, self.cy_px, self.fy_px, self.height_m, self.sin_tilt,
+                                self.cos_tilt, self.fx_px, self.tilt_deg)  # fmt: skip
+            self._compiled = (np.array(camera_constants, np.float64), coefs, np.array([*scalars, *half_grid]))
+            if not self._compiled_rows_agree(camera.width_px, camera.height_px):
+                self._compiled = None
 
     # ------------------------------------------------------------ undistortion
     def undistort(self, uv_px: np.ndarray) -> np.ndarray:
         """(N, 2) float64 distorted pixels -> (N, 2) ideal pixels; as ``CameraModel.undistort_pixels``."""
         if not self.distorted or len(uv_px) == 0:
             return uv_px
-        und = cv2.undistortPointsIter(
-            uv_px.reshape(-1, 1, 2),
-            self._intrinsic,
-            self._distortion,
-            self._identity,
-            self._intrinsic,
-            _UNDISTORT_CRITERIA,
-        )
-        return und.reshape(-1, 2)
+        return self._undistort(uv_px)
 
     # -------------------------------------------------------------- vectorised
     def features(self, boxes_px: np.ndarray, areas_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -136,6 +149,23 @@ class RegionGeometry:
             return [
                 row if ok else None for row, ok in zip(feats.tolist(), valid.tolist(), strict=True)
             ]
+        if self._compiled is not None and n:
+            feats, valid = np.empty((n, N_FEATURES)), np.empty(n, np.bool_)
+            boxes = np.array(boxes_px, np.float64).reshape(n, 4)
+            if feature_rows(boxes, np.array(areas_px, np.float64), *self._compiled, feats, valid):
+                rows = feats.tolist()
+                tilt_deg, cam_h = self.tilt_deg, self.height_m
+                for row in rows:  # the camera's own numbers, as the plain rows carry them
+                    row[4], row[5] = tilt_deg, cam_h
+                return [row if ok else None for row, ok in zip(rows, valid.tolist(), strict=True)]
+        return self.python_rows(boxes_px, areas_px)
+
+    def python_rows(
+        self, boxes_px: Sequence[Sequence[float]], areas_px: Sequence[float]
+    ) -> list[list[float] | None]:
+        """``rows`` of up to ``SCALAR_MAX_REGIONS`` regions in plain Python (the reference of the
+        compiled rows), one undistortion call for all of them."""
+        n = len(boxes_px)
         if self.distorted and n:
             pts = []
             for x, y, w, h in boxes_px:
@@ -164,6 +194,19 @@ class RegionGeometry:
             area_m2 = area * height_m * width_m / (w * h) if w * h else math.nan
             out.append([width_m, height_m, area_m2, distance_m, self.tilt_deg, cam_h])
         return out
+
+    def _compiled_rows_agree(self, width_px: int, height_px: int) -> bool:
+        """Whether the compiled rows equal the plain Python rows bit for bit on probe boxes all
+        over the frame (above the horizon too)."""
+        rng = np.random.default_rng(0)
+        xy = rng.integers(0, (width_px, height_px), (512, 2))
+        wh = rng.integers(1, np.maximum((width_px, height_px) - xy, 2), (512, 2))
+        boxes = np.column_stack([xy, np.minimum(wh, (width_px, height_px) - xy)]).tolist()
+        areas = (rng.uniform(0.2, 1.0, 512) * np.prod(wh, axis=1)).tolist()
+        return all(
+            self.rows(boxes[i : i + 8], areas[i : i + 8]) == self.python_rows(boxes[i : i + 8], areas[i : i + 8])
+            for i in range(0, 512, 8)
+        )
 
 
 def region_features(

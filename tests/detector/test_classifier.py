@@ -194,3 +194,23 @@ def test_camera_rows_proba_equals_predict_proba(small_model, held_out) -> None:
 
     other = LogisticRegression(max_iter=5000).fit(held_out.X[::20], held_out.y[::20])
     assert camera_rows_proba(other, cam) is None
+
+
+def test_compiled_rows_proba_equals_the_plain_python_rows_bit_for_bit(small_model, held_out) -> None:
+    from detector.camera import CameraModel
+    from detector.fast_proba import camera_rows_proba, compiled_rows_proba
+
+    cam = CameraModel(
+        height_m=4.5, tilt_deg=17.0, focal_mm=3.67, sensor_w_mm=4.8, sensor_h_mm=3.6, width_px=424, height_px=240
+    )
+    keep = np.isin(held_out.y, ["noise", "vehicle"])
+    two = DimensionalClassifier().fit(held_out.X[keep], held_out.y[keep])  # one logistic output
+    rng = np.random.default_rng(5)
+    for model in (default_model(), small_model, two):
+        rows_proba = camera_rows_proba(model, cam)
+        compiled = compiled_rows_proba(rows_proba, cam)
+        assert compiled is not None
+        X = np.vstack([held_out.X, rng.uniform((0, -2, 0, 0, 0, 0), (15, 15, 60, 200, 0, 0), (5000, 6))])
+        X[:, 4], X[:, 5] = cam.tilt_deg, cam.height_m  # one camera's rows
+        assert np.array_equal(compiled(X), np.array(rows_proba(X.tolist())))
+    assert compiled_rows_proba(None, cam) is None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -67,6 +68,24 @@ def test_walking_pedestrian_is_detected_at_its_distance_as_a_pedestrian(model):
     assert len(set(ids)) == 1
     assert det.tracker.is_confirmed(ids[0])
     assert det.is_target(detections)
+
+
+@pytest.mark.parametrize("tracking", [True, False])
+def test_detections_built_at_once_are_the_constructors_own(model, tracking):
+    # the detector builds Detections with all fields at once (detector._detection), not through
+    # the frozen dataclass's __init__: the same fields, values, equality, and frozen still
+    cam = scene_b()
+    clip = Clip(cam, seed=1)
+    det = Detector(cam, model=model, tracking=tracking)
+    clip.warm_up(det)
+    found = [d for k in range(10) for d in det.process(clip.frame([walker(10.0, -2.5, k / FPS)]))]
+    assert len(found) >= 8
+    names = [f.name for f in dataclasses.fields(Detection)]
+    for d in found:
+        assert list(vars(d)) == names and d == Detection(**vars(d))
+        assert (d.track_cls is None) == (not tracking) and dataclasses.replace(d) == d
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            d.cls = "noise"
 
 
 def test_border_regions_and_far_regions_are_not_returned(model):
