@@ -70,7 +70,7 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 12
+MODEL_VERSION = 13
 #: The shares of the frame a threshold baseline triggers at (the paper's 5 % and 0.5 %): the
 #: persistence of a big foreground region is fitted on how long it stays above these.
 PERSISTENCE_FRACTIONS = (0.05, 0.005)
