@@ -86,8 +86,6 @@ class CameraGeometry:
         self.far_lamps = [np.flatnonzero((ahead_m[:, i] > 0.0) & (ahead_m[:, i] <= FAR_VIEW_M) & (np.abs(lamp - i) >= 2))
                           for i in range(len(cams))]  # fmt: skip
 
-
-
     @property
     def n(self) -> int:
         return len(self.cameras)
