@@ -22,6 +22,32 @@ _DEFAULT_PARAMS = DivisionParams()
 
 
 @njit(cache=True, nogil=True)
+def _row_and_column_counts(mask):  # pragma: no cover - compiled
+    """Set pixels per row and per column of a boolean mask (int64 each)."""
+    h, w = mask.shape
+    rows = np.zeros(h, np.int64)
+    cols = np.zeros(w, np.int64)
+    for r in range(h):
+        for c in range(w):
+            if mask[r, c]:
+                rows[r] += 1
+                cols[c] += 1
+    return rows, cols
+
+
+@njit(cache=True, nogil=True)
+def _first_and_last_at_least(values, threshold):  # pragma: no cover - compiled
+    """The first and last index whose value is at least ``threshold`` (-1, -1: none)."""
+    first, last = -1, -1
+    for i in range(len(values)):
+        if values[i] >= threshold:
+            if first < 0:
+                first = i
+            last = i
+    return first, last
+
+
+@njit(cache=True, nogil=True)
 def _spot_split(occ, tall_fraction, min_side_fraction, spot_row_fraction, max_side_height_fraction,
                 wide_row_factor, max_spot_aspect):  # fmt: skip  # pragma: no cover - compiled
     """(split?, object, spot) of a filled uint8 mask (nonzero: set), as ``detector.split``'s
@@ -31,19 +57,11 @@ def _spot_split(occ, tall_fraction, min_side_fraction, spot_row_fraction, max_si
     if h < 6 or w < 6:
         return False, none, none
     mask = occ != 0
-    col_h = np.zeros(w, np.int64)
-    for r in range(h):
-        for c in range(w):
-            col_h[c] += mask[r, c]
+    _, col_h = _row_and_column_counts(mask)
     tallest = col_h.max()
     if tallest == 0:
         return False, none, none
-    c0, c1 = -1, -1
-    for c in range(w):
-        if col_h[c] >= tall_fraction * tallest:
-            if c0 < 0:
-                c0 = c
-            c1 = c
+    c0, c1 = _first_and_last_at_least(col_h, tall_fraction * tallest)
     n_side = col_h[:c0].sum() + col_h[c1 + 1 :].sum()
     if n_side < min_side_fraction * col_h.sum():
         return False, none, none
@@ -59,20 +77,10 @@ def _spot_split(occ, tall_fraction, min_side_fraction, spot_row_fraction, max_si
                     right_w[r] += 1
                 else:
                     tall_w[r] += 1
-    b_top, b_bottom = -1, -1
-    for r in range(h):
-        if tall_w[r]:
-            if b_top < 0:
-                b_top = r
-            b_bottom = r
+    b_top, b_bottom = _first_and_last_at_least(tall_w, 1)
     side_w = left_w + right_w
     widest = side_w.max()
-    s_top, s_bottom = -1, -1
-    for r in range(h):
-        if side_w[r] >= spot_row_fraction * widest:
-            if s_top < 0:
-                s_top = r
-            s_bottom = r
+    s_top, s_bottom = _first_and_last_at_least(side_w, spot_row_fraction * widest)
     side_h = s_bottom - s_top + 1
     if side_h > max_side_height_fraction * (b_bottom - b_top + 1):
         return False, none, none
@@ -132,10 +140,7 @@ def _widening_split(occ, start, widen_ratio, widen_start,
     if h < 2 * start or w < 6:
         return False, none, none
     mask = occ != 0
-    row_w = np.zeros(h, np.int64)
-    for r in range(h):
-        for c in range(w):
-            row_w[r] += mask[r, c]
+    row_w, _ = _row_and_column_counts(mask)
     widest_above = row_w[:start].max()
     cut = -1
     found = False
