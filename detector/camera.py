@@ -40,6 +40,10 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from detector.yamlfile import read_yaml_mapping
 
+#: A row whose depression below the horizon is at or below this, rad, has no ground point
+#: (it looks at or above the horizon): every ground projection of the detector shares it.
+MIN_DEPRESSION_RAD = 1e-9
+
 
 class CameraError(ValueError):
     """A camera description that cannot be used; the message names the field or file."""
@@ -232,7 +236,7 @@ class CameraModel(BaseModel):
         """
         alpha = np.asarray(self.depression_rad(v_px))
         with np.errstate(divide="ignore", invalid="ignore"):
-            d = np.where(alpha > 1e-9, self.height_m / np.tan(np.maximum(alpha, 1e-9)), np.nan)
+            d = np.where(alpha > MIN_DEPRESSION_RAD, self.height_m / np.tan(np.maximum(alpha, MIN_DEPRESSION_RAD)), np.nan)
         return d
 
     def pixel_to_ground(self, uv_px: np.ndarray, undistorted: bool = False) -> np.ndarray:

@@ -27,7 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from detector.camera import CameraModel
+from detector.camera import MIN_DEPRESSION_RAD, CameraModel
 from detector.features_compiled import feature_rows
 from detector.undistort import compiled_undistortion, lens_constants, opencv_undistortion
 
@@ -36,8 +36,6 @@ N_FEATURES = len(FEATURE_NAMES)
 
 # up to this many regions, scalar Python beats numpy dispatch (measured: ~equal at 24 regions)
 SCALAR_MAX_REGIONS = 16
-# rows whose depression is at or below this have no ground point (as CameraModel.forward_distance_m)
-_MIN_DEPRESSION_RAD = 1e-9
 
 
 class RegionGeometry:
@@ -113,10 +111,10 @@ class RegionGeometry:
 
         b = (v_bottom - self.cy_px) / self.fy_px
         alpha = self.tilt_rad + np.arctan(b)  # eqs. 2-3
-        ground = alpha > _MIN_DEPRESSION_RAD
+        ground = alpha > MIN_DEPRESSION_RAD
         with np.errstate(divide="ignore", invalid="ignore"):
             distance_m = np.where(
-                ground, self.height_m / np.tan(np.maximum(alpha, _MIN_DEPRESSION_RAD)), np.nan
+                ground, self.height_m / np.tan(np.maximum(alpha, MIN_DEPRESSION_RAD)), np.nan
             )  # eq. 4
             beta = self.tilt_rad + np.arctan((tc[:, 1] - self.cy_px) / self.fy_px)
             height_m = self.height_m - distance_m * np.tan(beta)  # eqs. 5-6
@@ -183,7 +181,7 @@ class RegionGeometry:
                 v_top = y - 0.5
             b = ((v_left + v_right) / 2.0 - cy) / fy
             alpha = tilt_rad + math.atan(b)
-            if not alpha > _MIN_DEPRESSION_RAD:
+            if not alpha > MIN_DEPRESSION_RAD:
                 out.append(None)
                 continue
             # 0 < alpha < pi here (tilt < 90 deg, |atan| < 90 deg): tan(alpha) is never 0
@@ -249,6 +247,6 @@ def estimated_width_m(
         # z_cam = h_c / (sin(theta) + b cos(theta)) with b = (v - c_y) / f_y
         b = (np.asarray(v_bottom_px) - camera.cy_px) / camera.fy_px
         z_cam = np.where(
-            alpha > 1e-9, camera.height_m / (np.sin(theta) + b * np.cos(theta)), np.nan
+            alpha > MIN_DEPRESSION_RAD, camera.height_m / (np.sin(theta) + b * np.cos(theta)), np.nan
         )
     return z_cam * np.abs(np.asarray(u_right_px) - np.asarray(u_left_px)) / camera.fx_px

@@ -16,10 +16,8 @@ import math
 import numpy as np
 from numba import njit
 
+from detector.camera import MIN_DEPRESSION_RAD
 from detector.undistort import _undistort
-
-# rows whose depression is at or below this have no ground point (as detector.features)
-MIN_DEPRESSION_RAD = 1e-9
 
 
 @njit(cache=True, nogil=True)

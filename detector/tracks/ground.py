@@ -16,11 +16,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from detector.camera import CameraModel
+from detector.camera import MIN_DEPRESSION_RAD, CameraModel
 from detector.features import RegionGeometry
-
-# rows at or above the horizon have no ground point (as RegionGeometry)
-_MIN_DEPRESSION_RAD = 1e-9
 
 
 class GroundProjector:
@@ -48,7 +45,7 @@ class GroundProjector:
         for u, v in pts:
             b = (v - self.cy_px) / self.fy_px
             alpha = self.tilt_rad + math.atan(b)
-            if not alpha > _MIN_DEPRESSION_RAD:
+            if not alpha > MIN_DEPRESSION_RAD:
                 out.append(None)
                 continue
             forward_m = self.height_m / math.tan(alpha)
