@@ -307,8 +307,9 @@ def fit_area_fractions(frames: dict[str, np.ndarray], idle_frame_stride: int = 1
         if k < 0 and f % stride:
             continue
         keys = threshold_conditions(int(k), float(d), bool(lit >= LIT_LEVEL), int(age), far_s)
-        # a frame counts under its own keys only: a recent far change's fallbacks are the frames without one
-        for key in keys[:2] if k < 0 and len(keys) > 2 else keys:
+        # a frame with nothing in view counts under its own two keys (with and without the age), not
+        # under a recent far change's fallbacks, which are the frames without one
+        for key in keys[:2] if k < 0 else keys:
             by_key.setdefault(key, []).append(frac)
     return {key: _capped(np.array(v)) for key, v in sorted(by_key.items())}
 

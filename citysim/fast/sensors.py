@@ -95,7 +95,9 @@ class FastSensors:
         self.frame_k = -1
         self.agents: list = []
         self.levels = np.zeros(self.geometry.n)
-        self.changes = LevelChanges(self.geometry)
+        #: when the lamps' levels last changed: only the threshold baselines' segmenters read it, so
+        #: it is kept (every observed frame) only once one of them is made
+        self.changes: LevelChanges | None = None
         self.cand = self.geometry.candidates([])
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
@@ -107,6 +109,7 @@ class FastSensors:
         return [SensedDetector(self, i, threshold) for i in range(self.geometry.n)]
 
     def segmenters(self, ctx) -> list[SensedSegmenter]:
+        self.changes = LevelChanges(self.geometry)
         return [SensedSegmenter(self, i) for i in range(self.geometry.n)]
 
     def observe(self, frame_k: int, agents: list, levels: np.ndarray) -> None:
@@ -119,7 +122,8 @@ class FastSensors:
             self._of_camera = [None] * self.geometry.n
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
-        self.changes.update(frame_k / self.fps, levels)
+        if self.changes is not None:
+            self.changes.update(frame_k / self.fps, levels)
         xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
         self.light = self.geometry.light_at(xs, levels) if len(agents) else xs
         self._lit_cells = None
