@@ -115,6 +115,12 @@ class Controller:
         detector's tracks: the class's ``tracking`` unless the spec sets it."""
         return cls.tracking if spec.tracking is None else bool(spec.tracking)
 
+    @classmethod
+    def decisions(cls, spec) -> str:
+        """Which of the detector's decisions this controller, as ``spec`` sets it up, counts: 'frame'
+        (each frame's own) or 'track' (its track's); fast mode draws from that fit of the sensor model."""
+        return "track" if cls.decides_per_track(spec) else "frame"
+
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         self.bank.release_expired(t_s)
 

@@ -18,11 +18,19 @@ import numpy as np
 from citysim.config.kinds import AGENT_KINDS
 from citysim.control.base import Controller
 from citysim.control.camera import BackgroundClock, LightChangeWatch
+from citysim.control.track_windows import (
+    PAPER_K,
+    PAPER_N,
+    TrackWindows,
+    fragment_keys,
+    plausible_marks,
+)
 
 
 def _cls(d) -> str:
-    """A detection's class: its track's pooled one when it has a track, else its frame's."""
-    return d.track_cls if d.track_cls is not None else d.cls
+    """A detection's class: its track's pooled one when its track is a target, else its frame's
+    (a track not yet judged is 'noise' by its pooled class, but its frame may say 'vehicle')."""
+    return d.track_cls if d.track_target else d.cls
 
 
 class DetectorPerFrame(Controller):
@@ -75,49 +83,39 @@ class DetectorPerFrame(Controller):
         return detections
 
 
-class TrackWindows:
-    """The last n target decisions of each track of one camera; a track is confirmed at k hits.
-
-    Keys are track ids (None: detections without a track, which share one window). A frame in
-    which a track is not seen counts as a miss; a window with no hit left is forgotten, so the
-    state stays as small as the tracks in view.
-    """
-
-    def __init__(self, k: int, n: int) -> None:
-        self.k, self.mask = k, (1 << n) - 1
-        self.bits: dict = {}
-
-    def update(self, hits: dict) -> set:
-        """Record one frame's ``{track key: target?}``; return the confirmed keys."""
-        mask = self.mask
-        bits = {key: b for key, b in ((key, (b << 1) & mask) for key, b in self.bits.items()) if b}
-        for key, hit in hits.items():
-            if hit:
-                bits[key] = bits.get(key, 0) | 1
-        self.bits = bits
-        k = self.k
-        return {key for key, b in bits.items() if b.bit_count() >= k}
-
-
 class DetectorConfirmed(DetectorPerFrame):
     """k-of-n confirmation per track (the paper's eq. 12; its implementation switches on 2 of the last 6 frames)."""
 
     name = "detector_confirmed"
+    tracking = True
+    #: per track, a track's window must span n frames of its life before it confirms
+    window_must_fill = True
+
+    @classmethod
+    def decisions(cls, spec) -> str:
+        # per track it counts a frame's own decision while the track is plausible
+        own = super().decisions(spec)
+        return "plausible" if own == "track" and cls.window_must_fill else own
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        # the paper's implementation switches when 2 of the last 6 frames hold a target
-        self.k = ctx.spec.k or 2
-        self.n = ctx.spec.n or 6
-        self.windows = [TrackWindows(self.k, self.n) for _ in ctx.camera_lamps]
+        self.k = ctx.spec.k or PAPER_K
+        self.n = ctx.spec.n or PAPER_N
+        # per track, a track's window must span n frames before it confirms (TrackWindows); fast
+        # mode's plausible tables already hold that wait (citysim.fast.records)
+        full = self.window_must_fill and self.decides_per_track(ctx.spec) and not getattr(ctx.sensors, "drawn", False)
+        self.windows = [TrackWindows(self.k, self.n, full_window=full) for _ in ctx.camera_lamps]
 
     def confirmed_tracks(self, camera_index, detections) -> set:
         """Record this frame's target decisions per track; the keys of the tracks now confirmed."""
-        det = self.detectors[camera_index]
-        hits: dict = {}
-        for d in detections:
-            hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
-        return self.windows[camera_index].update(hits)
+        window = self.windows[camera_index]
+        return window.update(self.marks(self.detectors[camera_index], detections, window))
+
+    def marks(self, det, detections, window: TrackWindows | None = None) -> dict:
+        """This frame's ``{track key: hit?}``: per frame, any target; per track, ``frame_hit``, young
+        fragments counted for the established track they stand on (with ``window``)."""
+        keys = fragment_keys(detections, window) if window is not None else None
+        return plausible_marks(detections, det.target_threshold, keys)
 
     def confirmed(self, camera_index, detections) -> bool:
         return bool(self.confirmed_tracks(camera_index, detections))
@@ -134,6 +132,15 @@ class DetectorTracked(DetectorConfirmed):
 
     name = "detector_tracked"
     tracking = True
+
+    #: a target track is plausible by definition: no young-track wait
+    window_must_fill = False
+
+    def marks(self, det, detections, window: TrackWindows | None = None) -> dict:
+        hits: dict = {}  # only frames of a track already judged a target count
+        for d in detections:
+            hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
+        return hits
 
 
 class DetectorNetwork(DetectorConfirmed):
@@ -181,7 +188,9 @@ class DetectorNetwork(DetectorConfirmed):
         lamp_index = self.ctx.camera_lamps[camera_index]
         self.bank.trigger(lamp_index, t_s)
         det = self.detectors[camera_index]
-        targets = [d for d in detections if d.track_id in confirmed and d.cls != "noise" and det.is_target([d])]
+        # the confirmed tracks' detections that are hits this frame (as their windows count them)
+        targets = [d for d in detections
+                   if d.track_id in confirmed and d.cls != "noise" and self.marks(det, [d]).get(d.track_id)]
         if not targets or t_s - self.last_sent_s[camera_index] < self.repeat_s:
             if targets:
                 # keep tracking directions between notifications

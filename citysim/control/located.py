@@ -43,7 +43,8 @@ import numpy as np
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
-from citysim.control.detecting import DetectorPerFrame, TrackWindows
+from citysim.control.detecting import DetectorPerFrame
+from citysim.control.track_windows import TrackWindows
 from citysim.world.agents import AgentState
 from citysim.world.coverage import approaches_seen
 from citysim.world.street import Street

@@ -19,8 +19,12 @@ whether the detector found each), it holds:
 * ``track``: the same hit, persistence, class and false-alarm tables fitted on the detector's
   track decisions (a detection is a target when its track is: ``detector_tracked`` and
   ``detector_located``) rather than each frame's own (``detector``, ``detector_confirmed``);
-  ``for_tracks()`` gives the model those controllers draw from. Insects seldom make a plausible
-  target track, so the two false-alarm rates differ several-fold.
+  Insects seldom make a plausible target track, so the two false-alarm rates differ several-fold.
+* ``plausible``: the same again on the frames ``detector_confirmed`` counts per track: a frame's
+  own target decision while no physics rule rules its track out, from the frame its track's
+  k-of-n window spans n frames of its life (``citysim.control.detecting.TrackWindows``; the wait
+  is in the tables, so fast mode's windows do not wait again).
+  ``for_decisions()`` gives the model a controller draws from.
 * ``p_regions_idle``: P(a frame with no candidate holds some moving region) (keeps the camera
   judged every frame, as in full fidelity).
 * the threshold baselines' trigger: samples of the largest foreground region's share of the
@@ -70,7 +74,7 @@ MAX_SAMPLES = 2000
 #: depends on how often the lamps in view switch, which differs between controllers.
 AGE_EDGES_FRAMES = (0, 15, 90)
 #: Bumped whenever the model's meaning changes, so cached models are refitted.
-MODEL_VERSION = 13
+MODEL_VERSION = 14
 #: The shares of the frame a threshold baseline triggers at (the paper's 5 % and 0.5 %): the
 #: persistence of a big foreground region is fitted on how long it stays above these.
 PERSISTENCE_FRACTIONS = (0.05, 0.005)
@@ -80,10 +84,10 @@ MAX_AREA_PERSISTENCE = 0.99
 #: 5 s, 5-20 s); older changes count as none (calibration: 2 % of the frames with nothing in view
 #: held a region over 0.5 % of the frame 20-40 s after the change, as without one).
 FAR_CHANGE_EDGES_S = (5.0, 20.0)
-#: The record columns (``citysim.fast.records``) the track-level fit reads in place of the frame-level ones.
-TRACK_COLUMNS = {"hit": "track_hit", "det_class": "track_det_class", "hit_ahead_m": "track_hit_ahead_m", "fa": "track_fa",
-                 "fa_distance_m": "track_fa_distance_m", "fa_box": "track_fa_box", "fa_class": "track_fa_class"}
-#: The fields ``SensorModel.track`` holds: those fitted again on the track decisions.
+#: The record columns the fits of other decisions read in place of the frame-level ones: a decision
+#: set's prefix (``citysim.fast.records.DECISION_PREFIXES``) before each.
+DECISION_COLUMNS = ("hit", "det_class", "hit_ahead_m", "fa", "fa_distance_m", "fa_box", "fa_class")
+#: The fields ``SensorModel.track`` and ``SensorModel.plausible`` hold: those fitted again on their decisions.
 TRACK_FIELDS = ("p_hit", "persistence", "class_given_hit", "hit_ahead_m", "fa_start_p", "fa_length_frames", "fa_reports",
                 "fa_per_camera_hour")
 
@@ -174,16 +178,23 @@ class SensorModel:
     candidate_frames: int = 0
     fa_per_camera_hour: float = 0.0  # false alarms started per camera-hour of calibration
     track: dict | None = None  # TRACK_FIELDS fitted on the track decisions (None: not recorded)
+    #: TRACK_FIELDS fitted on the frames of plausible tracks (``detector_confirmed`` per track)
+    plausible: dict | None = None
 
     def p_hit_array(self) -> np.ndarray:
         return np.asarray(self.p_hit, dtype=np.float64)
 
-    def for_tracks(self) -> SensorModel:
-        """The model of a controller deciding per track: this one with the track-level tables."""
-        if self.track is None:
-            raise ValueError(f"sensor model {self.key}: fitted without track decisions; recalibrate "
+    def for_decisions(self, decisions: str) -> SensorModel:
+        """The model of a controller counting the detector's ``decisions`` ('frame': each frame's
+        own; 'track': its track's; 'plausible': a frame's own while its track is plausible, from a
+        full k-of-n window of its life on): this one with that decision set's tables."""
+        if decisions == "frame":
+            return self
+        tables = {"track": self.track, "plausible": self.plausible}.get(decisions)
+        if tables is None:
+            raise ValueError(f"sensor model {self.key}: fitted without {decisions} decisions; recalibrate "
                              "(citysim calibrate)")
-        return SensorModel(**{**asdict(self), **self.track, "track": None})
+        return SensorModel(**{**asdict(self), **tables, "track": None, "plausible": None})
 
     def save(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -341,16 +352,18 @@ def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray],
     cells = cell_of(rows["kind"], rows["forward_m"], rows["bearing_rad"], rows["light"], rows["young"],
                     rows["speed_mps"])  # fmt: skip
     decisions = _fit_decisions(cells, rows, frames, camera_hours)
-    track = None
-    if "track_hit" in rows:  # the same fit on the track decisions' columns
-        track_rows = {**rows, **{c: rows[t] for c, t in TRACK_COLUMNS.items() if t in rows}}
-        track_frames = {**frames, **{c: frames[t] for c, t in TRACK_COLUMNS.items() if t in frames}}
-        fitted = _fit_decisions(cells, track_rows, track_frames, camera_hours)
-        track = {name: fitted[name] for name in TRACK_FIELDS}
+    others = {}
+    for prefix in ("track", "plausible"):  # the same fit on another decision set's columns
+        if f"{prefix}_hit" in rows:
+            named = {c: f"{prefix}_{c}" for c in DECISION_COLUMNS}
+            set_rows = {**rows, **{c: rows[t] for c, t in named.items() if t in rows}}
+            set_frames = {**frames, **{c: frames[t] for c, t in named.items() if t in frames}}
+            fitted = _fit_decisions(cells, set_rows, set_frames, camera_hours)
+            others[prefix] = {name: fitted[name] for name in TRACK_FIELDS}
     return SensorModel(
         key=key, **decisions, area_fraction=fit_area_fractions(frames, idle_frame_stride),
         area_persistence=fit_area_persistence(frames), frames=int(len(frames["camera"])),
-        candidate_frames=int(len(rows["hit"])), track=track,
+        candidate_frames=int(len(rows["hit"])), **others,
     )  # fmt: skip
 
 

@@ -18,6 +18,14 @@ from collections.abc import Sequence
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
+from citysim.control.track_windows import (
+    PAPER_K,
+    PAPER_N,
+    TrackWindows,
+    fragment_keys,
+    frame_hit,
+    plausible_marks,
+)
 from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
     BEAM,
@@ -39,11 +47,17 @@ LIT_REACH_M = 20.0
 #: Half the width of a beam on the ground ahead of a road user out of view, m: dipped headlights
 #: light about the lane they drive in and the next (2 x 3.5 m lanes, plus the verge).
 BEAM_HALF_WIDTH_M = 4.0
+#: The detector's decisions recorded per candidate and judged frame, by column prefix: each frame's
+#: own ("": ``detector``, ``detector_confirmed`` per frame), its track's ("track_":
+#: ``detector_tracked``, ``detector_located``), and a frame's own while its track is plausible and
+#: its k-of-n window full ("plausible_": ``detector_confirmed`` per track). Fast mode draws each
+#: controller's hits from the fit of its own decisions (``SensorModel.for_decisions``).
+DECISION_PREFIXES = ("", "track_", "plausible_")
 ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
-               "hit", "det_class", "track_hit", "track_det_class", "hit_ahead_m", "track_hit_ahead_m")  # fmt: skip
-FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "fa", "fa_distance_m", "fa_box", "fa_class",
-                 "regions", "near_kind", "near_forward_m", "area_fraction", "age_bin",
-                 "track_fa", "track_fa_distance_m", "track_fa_box", "track_fa_class", "far_change_s")  # fmt: skip
+               *(f"{p}{c}" for p in DECISION_PREFIXES for c in ("hit", "det_class", "hit_ahead_m")))  # fmt: skip
+FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "regions", "near_kind", "near_forward_m",
+                 "area_fraction", "age_bin", "far_change_s",
+                 *(f"{p}{c}" for p in DECISION_PREFIXES for c in ("fa", "fa_distance_m", "fa_box", "fa_class")))  # fmt: skip
 
 
 def is_young(learning_rate: float | None) -> bool:
@@ -118,6 +132,8 @@ class CalibrationRecorder(Collector):
         self.levels = np.zeros(geometry.n)
         self.changes = LevelChanges(geometry)
         self._placed = None
+        # each camera's tracks' ages, counted as detector_confirmed's windows count them
+        self.windows = [TrackWindows(PAPER_K, PAPER_N, full_window=True) for _ in range(geometry.n)]
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
         self.agents = list(agents)
@@ -139,35 +155,52 @@ class CalibrationRecorder(Collector):
         frame = int(round(t_s * self.fps))
         cand, light = self._candidates()
         idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
-        # the frame's own decision (detector, detector_confirmed) and its track's (detector_tracked,
-        # detector_located): fast mode draws each controller's kind from its own fit
-        hits, fa = self._match(truth, [d for d in detections if d.p_target >= self.target_threshold])
-        ahead: dict[int, float] = {}
-        fa = self._near_candidates(lamp_index, idx, hits, fa, ahead)
-        track_hits, track_fa = self._match(truth, [d for d in detections if _track_target(d, self.target_threshold)])
-        track_ahead: dict[int, float] = {}
-        track_fa = self._near_candidates(lamp_index, idx, track_hits, track_fa, track_ahead)
+        decided = {prefix: self._decided(lamp_index, idx, truth, targets)
+                   for prefix, targets in self._targets(lamp_index, detections).items()}  # fmt: skip
         young = is_young(recorded.last_rate)
         for a_i in idx.tolist():
             agent = self.agents[a_i]
-            det_class = hits.get(agent.object_id, -1)
-            track_class = track_hits.get(agent.object_id, -1)
-            self._add_row((lamp_index, frame, agent.object_id, KINDS.index(agent.cls), cand.forward_m[a_i, lamp_index],
-                           cand.bearing_rad[a_i, lamp_index], agent.speed_mps, light[a_i], young, det_class >= 0,
-                           det_class, track_class >= 0, track_class,
-                           ahead.get(agent.object_id, 0.0) if det_class >= 0 else np.nan,
-                           track_ahead.get(agent.object_id, 0.0) if track_class >= 0 else np.nan))  # fmt: skip
-        self._beam_rows(lamp_index, frame, cand, young, hits, track_hits)
+            row = {"camera": lamp_index, "frame": frame, "object_id": agent.object_id, "kind": KINDS.index(agent.cls),
+                   "forward_m": cand.forward_m[a_i, lamp_index], "bearing_rad": cand.bearing_rad[a_i, lamp_index],
+                   "speed_mps": agent.speed_mps, "light": light[a_i], "young": young}  # fmt: skip
+            for prefix, (hits, _, ahead) in decided.items():
+                det_class = hits.get(agent.object_id, -1)
+                row.update({f"{prefix}hit": det_class >= 0, f"{prefix}det_class": det_class,
+                            f"{prefix}hit_ahead_m": ahead.get(agent.object_id, 0.0) if det_class >= 0 else np.nan})
+            self._add_row(row)
+        self._beam_rows(lamp_index, frame, cand, young, {prefix: hits for prefix, (hits, _, _) in decided.items()})
         beams = np.flatnonzero(cand.beam_seen[:, lamp_index]) if len(self.agents) else idx
         near_kind, near_forward_m = nearest_in_view(np.array([KINDS.index(self.agents[j].cls) for j in idx.tolist()]),
                                                     cand.forward_m[idx, lamp_index],
                                                     cand.beam_forward_m[beams, lamp_index])  # fmt: skip
-        values = (lamp_index, frame, float(self.levels[lamp_index]), len(idx) > 0, *_fa_values(fa),
-                  len(recorded.inner.last_regions) > 0, near_kind, near_forward_m, recorded.last_area_fraction,
-                  background_age_bin(recorded.last_rate), *_fa_values(track_fa),
-                  self.changes.far_change_age_s(lamp_index, t_s))  # fmt: skip
-        for col, value in zip(FRAME_COLUMNS, values, strict=True):
-            self.frames[col].append(value)
+        values = {"camera": lamp_index, "frame": frame, "light": float(self.levels[lamp_index]),
+                  "has_candidates": len(idx) > 0, "regions": len(recorded.inner.last_regions) > 0,
+                  "near_kind": near_kind, "near_forward_m": near_forward_m,
+                  "area_fraction": recorded.last_area_fraction, "age_bin": background_age_bin(recorded.last_rate),
+                  "far_change_s": self.changes.far_change_age_s(lamp_index, t_s)}  # fmt: skip
+        for prefix, (_, fa, _) in decided.items():
+            values.update(zip((f"{prefix}{c}" for c in ("fa", "fa_distance_m", "fa_box", "fa_class")), _fa_values(fa),
+                              strict=True))  # fmt: skip
+        for col in FRAME_COLUMNS:
+            self.frames[col].append(values[col])
+
+    def _targets(self, lamp_index: int, detections: Sequence) -> dict[str, list]:
+        """This frame's target detections under each decision set (``DECISION_PREFIXES``)."""
+        threshold, window = self.target_threshold, self.windows[lamp_index]
+        keys = fragment_keys(detections, window)
+        marks = plausible_marks(detections, threshold, keys)
+        window.update(marks)
+        return {"": [d for d in detections if d.p_target >= threshold],
+                "track_": [d for d in detections if _track_target(d, threshold)],
+                "plausible_": [d for d, key in zip(detections, keys, strict=True)
+                               if marks.get(key) and frame_hit(d, threshold) and window.seen_enough(key)]}  # fmt: skip
+
+    def _decided(self, lamp_index: int, idx: np.ndarray, truth: Sequence, targets: list) -> tuple:
+        """(candidate id -> detected class index, false alarms, candidate id -> m its hit stands ahead of it)."""
+        hits, fa = self._match(truth, targets)
+        ahead: dict[int, float] = {}
+        fa = self._near_candidates(lamp_index, idx, hits, fa, ahead)
+        return hits, fa, ahead
 
     def _near_candidates(self, lamp_index: int, idx: np.ndarray, hits: dict[int, int], fa: list,
                          ahead: dict[int, float] | None = None) -> list:  # fmt: skip
@@ -217,24 +250,28 @@ class CalibrationRecorder(Collector):
                 return a
         return None
 
-    def _beam_rows(self, lamp_index: int, frame: int, cand, young: bool, hits: dict, track_hits: dict) -> None:
-        """One row per beam candidate of the camera (kind ``BEAM``, at its beam's middle)."""
+    def _beam_rows(self, lamp_index: int, frame: int, cand, young: bool, hits: dict[str, dict]) -> None:
+        """One row per beam candidate of the camera (kind ``BEAM``, at its beam's middle); ``hits``
+        per decision set."""
         if not len(self.agents):
             return
         for a_i in np.flatnonzero(cand.beam_seen[:, lamp_index]).tolist():
             agent = self.agents[a_i]
             key = beam_id(agent.object_id)
-            det_class, track_class = hits.get(key, -1), track_hits.get(key, -1)
             light = float(self.geometry.light_at(np.array([beam_x_m(agent)]), self.levels)[0])
-            self._add_row((lamp_index, frame, key, KINDS.index(BEAM), cand.beam_forward_m[a_i, lamp_index],
-                           cand.beam_bearing_rad[a_i, lamp_index], agent.speed_mps, light, young, det_class >= 0,
-                           det_class, track_class >= 0, track_class, 0.0 if det_class >= 0 else np.nan,
-                           0.0 if track_class >= 0 else np.nan))  # fmt: skip
+            row = {"camera": lamp_index, "frame": frame, "object_id": key, "kind": KINDS.index(BEAM),
+                   "forward_m": cand.beam_forward_m[a_i, lamp_index], "bearing_rad": cand.beam_bearing_rad[a_i, lamp_index],
+                   "speed_mps": agent.speed_mps, "light": light, "young": young}  # fmt: skip
+            for prefix, decided in hits.items():
+                det_class = decided.get(key, -1)
+                row.update({f"{prefix}hit": det_class >= 0, f"{prefix}det_class": det_class,
+                            f"{prefix}hit_ahead_m": 0.0 if det_class >= 0 else np.nan})
+            self._add_row(row)
 
-    def _add_row(self, values: tuple) -> None:
-        """One candidate row, its values in ``ROW_COLUMNS`` order."""
-        for col, value in zip(ROW_COLUMNS, values, strict=True):
-            self.rows[col].append(value)
+    def _add_row(self, row: dict) -> None:
+        """One candidate row: a value for every column of ``ROW_COLUMNS``."""
+        for col in ROW_COLUMNS:
+            self.rows[col].append(row[col])
 
     def _match(self, truth: Sequence, targets: Sequence) -> tuple[dict[int, int], list]:
         """Truth object id -> detected class index of its target detection; unmatched target detections."""
@@ -250,15 +287,14 @@ class CalibrationRecorder(Collector):
 
     def columns(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         rows = {c: np.asarray(v) for c, v in self.rows.items()}
-        for c in ("camera", "frame", "object_id", "kind", "det_class", "track_det_class"):
+        for c in ("camera", "frame", "object_id", "kind", *(f"{p}det_class" for p in DECISION_PREFIXES)):
             rows[c] = rows[c].astype(np.int64).reshape(-1)
-        for c in ("forward_m", "bearing_rad", "speed_mps", "light", "hit_ahead_m", "track_hit_ahead_m"):
+        for c in ("forward_m", "bearing_rad", "speed_mps", "light", *(f"{p}hit_ahead_m" for p in DECISION_PREFIXES)):
             rows[c] = rows[c].astype(np.float64).reshape(-1)
-        rows["young"] = rows["young"].astype(bool).reshape(-1)
-        rows["hit"] = rows["hit"].astype(bool).reshape(-1)
-        rows["track_hit"] = rows["track_hit"].astype(bool).reshape(-1)
+        for c in ("young", *(f"{p}hit" for p in DECISION_PREFIXES)):
+            rows[c] = rows[c].astype(bool).reshape(-1)
         frames = {c: np.asarray(v) for c, v in self.frames.items()}
-        for c in ("fa_box", "track_fa_box"):
+        for c in (f"{p}fa_box" for p in DECISION_PREFIXES):
             frames[c] = frames[c].astype(np.float64).reshape(-1, 4)
         return rows, frames
 

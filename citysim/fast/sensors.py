@@ -82,6 +82,10 @@ class SensedFrame:
 class FastSensors:
     """The sensor model applied to one night's agents: the factory camera controllers call."""
 
+    #: detections are drawn from calibrated tables, which already hold what the real detector's
+    #: track windows wait for (``citysim.control.detecting.TrackWindows``)
+    drawn = True
+
     def __init__(self, model: SensorModel, street, rngs: list[np.random.Generator], fps: float):
         self.model = model
         self.geometry = CameraGeometry(street)

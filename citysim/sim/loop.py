@@ -147,8 +147,8 @@ def run_controller(
     if fast_cameras:
         from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
 
-        # a controller deciding per track draws from the fit on track decisions (insects seldom make one)
-        model = sensor_model.for_tracks() if CONTROLLERS[spec.name].decides_per_track(spec) else sensor_model
+        # each controller draws from the fit on the decisions it counts (insects seldom make a target track)
+        model = sensor_model.for_decisions(CONTROLLERS[spec.name].decisions(spec))
         sensors = fast_sensors(night, model)
     controller = build_controller(night, spec, sensors)
     lamps, label = controller.ctx.lamps, spec.display_name

@@ -8,7 +8,9 @@ reason (checked in this order, the first that holds is given):
 
 * ``too few frames``: seen in fewer than ``min_frames`` frames (rain streaks, flickers), or its
   ground velocity not yet known (positions spanning half of ``VELOCITY_WINDOW_S``: 0.27 s at 15
-  frames/s; the rules below need it);
+  frames/s; the rules below need it); but a track whose box already jumped (below) as often as
+  an insect's does is 'jumping' from then on, velocity or not, so the controllers that count a
+  young track's frames (``citysim.control.track_windows``) know it for an insect early;
 * ``too fast``: ground speed above ``max_speed_mps`` (60 km/h, the fastest road user here,
   plus a margin for the estimate's noise);
 * ``erratic``: the ground velocity changed faster than ``max_accel_mps2`` in at least
@@ -176,6 +178,8 @@ def note_heading(track: Track, limits: PlausibilityLimits) -> None:
 
 def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     """Why no road user could have made ``track`` (None: one could)."""
+    if sum(track.box_jumps) >= limits.max_box_jumps and track.velocity_mps is None:
+        return "jumping"  # said as soon as seen: an insect's mark before its velocity is known
     if track.sightings < limits.min_frames or track.velocity_mps is None:
         return "too few frames"
     speed = track.speed_mps

@@ -1,6 +1,6 @@
 """detector_confirmed's k of n runs per track: hits of different tracks never add up."""
 
-from citysim.control.detecting import TrackWindows
+from citysim.control.track_windows import TrackWindows
 
 
 def test_two_of_six_of_one_track_confirms_it():

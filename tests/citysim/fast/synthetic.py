@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from citysim.fast.model import KINDS, TRACK_FIELDS, SensorModel, fit_sensor_model, table_shape
-from citysim.fast.records import FRAME_COLUMNS, ROW_COLUMNS
+from citysim.fast.records import DECISION_PREFIXES, FRAME_COLUMNS, ROW_COLUMNS
 
 REPO = Path(__file__).resolve().parents[3]
 CAMERA = REPO / "scenarios" / "cameras" / "scene_a.yaml"
@@ -17,8 +17,8 @@ def rows(n: int = 0, **columns) -> dict[str, np.ndarray]:
     """Candidate rows: every column of ``ROW_COLUMNS``, defaults for the ones not given."""
     defaults = {"camera": 0, "frame": np.arange(n), "object_id": 1, "kind": KINDS.index("pedestrian"),
                 "forward_m": 12.0, "bearing_rad": 0.0, "speed_mps": 1.4, "light": 0.2, "young": False,
-                "hit": False, "det_class": -1, "track_hit": False, "track_det_class": -1,
-                "hit_ahead_m": np.nan, "track_hit_ahead_m": np.nan}  # fmt: skip
+                **{f"{p}{c}": v for p in DECISION_PREFIXES
+                   for c, v in (("hit", False), ("det_class", -1), ("hit_ahead_m", np.nan))}}  # fmt: skip
     out = {}
     for col in ROW_COLUMNS:
         value = columns.get(col, defaults[col])
@@ -28,13 +28,13 @@ def rows(n: int = 0, **columns) -> dict[str, np.ndarray]:
 
 def frames(n: int = 0, **columns) -> dict[str, np.ndarray]:
     """Judged-frame rows: every column of ``FRAME_COLUMNS``, defaults for the ones not given."""
-    defaults = {"camera": 0, "frame": np.arange(n), "light": 0.2, "has_candidates": False, "fa": False,
-                "fa_distance_m": 15.0, "fa_box": None, "fa_class": 1, "regions": False, "near_kind": -1,
-                "near_forward_m": np.nan, "area_fraction": 0.0, "age_bin": 2, "track_fa": False,
-                "track_fa_distance_m": 15.0, "track_fa_box": None, "track_fa_class": 1, "far_change_s": np.inf}  # fmt: skip
+    defaults = {"camera": 0, "frame": np.arange(n), "light": 0.2, "has_candidates": False, "regions": False,
+                "near_kind": -1, "near_forward_m": np.nan, "area_fraction": 0.0, "age_bin": 2, "far_change_s": np.inf,
+                **{f"{p}{c}": v for p in DECISION_PREFIXES
+                   for c, v in (("fa", False), ("fa_distance_m", 15.0), ("fa_box", None), ("fa_class", 1))}}  # fmt: skip
     out = {}
     for col in FRAME_COLUMNS:
-        if col in ("fa_box", "track_fa_box"):
+        if col.endswith("fa_box"):
             out[col] = np.tile(np.array([[100.0, 100.0, 20.0, 40.0]]), (n, 1)) if columns.get(col) is None \
                 else np.asarray(columns[col], dtype=np.float64)  # fmt: skip
             continue
@@ -56,6 +56,7 @@ def constant_model(p_hit: float, fa_start_p: float = 0.0, area_fraction: float =
     conditions = [f"none/{b}" for b in ("dim", "lit")] + [f"{k}/{d}" for k in KINDS for d in range(12)]
     model.area_fraction = {c: [area_fraction] for c in conditions}
     model.track = {name: getattr(model, name) for name in TRACK_FIELDS}  # tracks decide alike
+    model.plausible = dict(model.track)
     return model
 
 

@@ -54,17 +54,24 @@ def test_false_alarms_light_lamps_with_nobody_there(scenario):
     assert triggers(noisy) > 0 and noisy["false_on_time_s"] > 0.0
 
 
-def test_controllers_deciding_per_track_draw_the_track_decisions_false_alarms(scenario):
-    # frame decisions raise false alarms, track decisions none (insects make no plausible track)
+def test_each_controller_draws_the_false_alarms_of_the_decisions_it_counts(scenario):
+    # frame decisions raise false alarms, track decisions none (insects make no plausible target
+    # track), the frames of plausible tracks (detector_confirmed per track) fewer
     empty = scenario_from_mapping(tiny_scenario(traffic={"classes": {}}))
     model = constant_model(1.0, fa_start_p=0.05)
     model.track = {**model.track, "fa_start_p": [0.0, 0.0]}
-    assert fast(empty, "detector_confirmed", model)["false_on_time_s"] > 0.0
-    for name in ("detector_tracked", "detector_located"):
+    model.plausible = {**model.plausible, "fa_start_p": [0.0, 0.0]}
+    assert fast(empty, "detector", model)["false_on_time_s"] > 0.0
+    assert fast(empty, "detector_confirmed", model, tracking=False)["false_on_time_s"] > 0.0
+    for name in ("detector_confirmed", "detector_network", "detector_tracked", "detector_located"):
         spec = {"light_blind_ends": False} if name == "detector_located" else {}
         assert fast(empty, name, model, **spec)["false_on_time_s"] == 0.0, name
-    # a scenario may turn tracks on for detector_confirmed: then it draws the track decisions too
-    assert fast(empty, "detector_confirmed", model, tracking=True)["false_on_time_s"] == 0.0
+    # a scenario may turn tracks on for the paper's detector: then it draws the track decisions
+    assert fast(empty, "detector", model, tracking=True)["false_on_time_s"] == 0.0
+    # detector_confirmed per track draws the plausible tables, not the track ones
+    model.plausible = {**model.plausible, "fa_start_p": [0.05, 0.05]}
+    assert fast(empty, "detector_confirmed", model)["false_on_time_s"] > 0.0
+    assert fast(empty, "detector_tracked", model)["false_on_time_s"] == 0.0
 
 
 def test_threshold_baselines_trigger_on_the_drawn_region_share(scenario):
@@ -110,6 +117,7 @@ def test_a_car_out_of_view_lights_the_zone_its_beam_reaches_only_when_beams_are_
     p[KINDS.index(BEAM)] = 1.0
     beams_only.p_hit = p.tolist()
     beams_only.track = {**beams_only.track, "p_hit": beams_only.p_hit}
+    beams_only.plausible = {**beams_only.plausible, "p_hit": beams_only.p_hit}
     seen = fast(scenario, "detector_confirmed", beams_only)
     blind = fast(scenario, "detector_confirmed", constant_model(0.0))
     assert triggers(blind) == 0 and triggers(seen) > 0

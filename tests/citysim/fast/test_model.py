@@ -121,25 +121,28 @@ def test_a_frame_with_only_a_beam_in_view_is_the_beams_condition():
     assert kind == -1 and np.isnan(forward_m)
 
 
-def test_the_track_decisions_have_their_own_hit_and_false_alarm_tables():
+def test_each_decision_set_has_its_own_hit_and_false_alarm_tables():
     # frame decisions: an insect is a target in 1 judged frame of 10 and a walker in 3 of 4; its
-    # track decisions (plausibility) call the insect a target in 1 frame of 100, the walker in 1 of 2
+    # track decisions (plausibility) call the insect a target in 1 frame of 100, the walker in 1 of
+    # 2; the frames of plausible tracks the insect in 1 of 50, the walker in 5 of 8
     n = 400
     walker = rows(n, forward_m=9.5, hit=np.arange(n) % 4 != 0, det_class=1, track_hit=np.arange(n) % 2 == 0,
-                  track_det_class=1)
-    fa, track_fa = np.arange(1000) % 10 == 0, np.arange(1000) % 100 == 0
-    model = fit_sensor_model(walker, frames(1000, fa=fa, track_fa=track_fa, track_fa_distance_m=7.0),
-                             camera_hours=1.0)
-    tracks = model.for_tracks()
+                  track_det_class=1, plausible_hit=np.arange(n) % 8 < 5, plausible_det_class=1)
+    fa, track_fa, plausible_fa = (np.arange(1000) % m == 0 for m in (10, 100, 50))
+    model = fit_sensor_model(walker, frames(1000, fa=fa, track_fa=track_fa, track_fa_distance_m=7.0,
+                                            plausible_fa=plausible_fa), camera_hours=1.0)
+    tracks, plausible = model.for_decisions("track"), model.for_decisions("plausible")
+    assert model.for_decisions("frame") is model
     assert _cell(model, PED, 9.5) == pytest.approx(0.75, abs=PRIOR_FRAMES / n)
     assert _cell(tracks, PED, 9.5) == pytest.approx(0.50, abs=PRIOR_FRAMES / n)
-    assert model.fa_per_camera_hour == 100 and tracks.fa_per_camera_hour == 10
+    assert _cell(plausible, PED, 9.5) == pytest.approx(0.625, abs=PRIOR_FRAMES / n)
+    assert (model.fa_per_camera_hour, tracks.fa_per_camera_hour, plausible.fa_per_camera_hour) == (100, 10, 20)
     assert {r[0] for r in tracks.fa_reports} == {7.0}
-    # what the two share is kept; a model fitted without track columns says to recalibrate
-    assert tracks.area_fraction == model.area_fraction and tracks.track is None
-    frame_only = {k: v for k, v in walker.items() if not k.startswith("track_")}
+    # what they share is kept; a model fitted without a set's columns says to recalibrate
+    assert tracks.area_fraction == model.area_fraction and tracks.track is None and plausible.plausible is None
+    frame_only = {k: v for k, v in walker.items() if not k.startswith(("track_", "plausible_"))}
     with pytest.raises(ValueError, match="recalibrate"):
-        fit_sensor_model(frame_only, frames(10), camera_hours=1.0).for_tracks()
+        fit_sensor_model(frame_only, frames(10), camera_hours=1.0).for_decisions("plausible")
 
 
 def test_a_saved_model_loads_equal(tmp_path):
