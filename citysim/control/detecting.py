@@ -1,12 +1,13 @@
 """The paper's detector driving the lamps: per frame, confirmed k of n per track, and told to neighbours.
 
-The paper's controllers (``detector``, ``detector_confirmed``, ``detector_network``) decide per
-frame, as the paper does: detections carry no track and share one k-of-n window.
-``detector_tracked`` (and ``detector_located``) run the detector with tracks
-(``detector.tracks``): a detection is a target when its track is one (plausible, pooled
-P(target) >= threshold; ``Detector.is_target`` says so), and k of the last n frames are asked
-*of one track* (``TrackWindows``), so a flicker here and an insect there no longer add up to a
-confirmation. A scenario's controller spec may set ``tracking`` either way.
+``detector`` decides per frame, as the paper does: any target in the frame lights the lamp.
+``detector_confirmed`` and ``detector_network`` run the detector with tracks (``detector.tracks``)
+and ask the paper's k of the last n frames *of one track* (``citysim.control.track_windows``): a
+frame counts by its own class unless a physics rule rules its track out, so an insect here and a
+flicker there no longer add up to a confirmation, while a car is confirmed as soon as it has been
+seen in n frames. ``detector_tracked`` (and ``detector_located``) count only frames of a track
+already judged a target (plausible, pooled P(target) >= threshold; ``Detector.is_target``). A
+scenario's controller spec may set ``tracking: false`` for the paper's one window per frame.
 """
 
 from __future__ import annotations
@@ -39,9 +40,8 @@ class DetectorPerFrame(Controller):
     name = "detector"
     uses_camera = True
     #: decide per track (``detector.tracks``) rather than per frame; the scenario's controller
-    #: spec may override it. Off for the paper's controllers: on suburban_night's quiet hour tracks
-    #: cut the insects' false on-time 7.7x but lit 0.68 of zone entries on entry against 0.96
-    #: (headlight glare breaks cars into short tracks), so tracks are a controller of their own.
+    #: spec may override it. Off for the paper's frame-by-frame detector; detector_confirmed and
+    #: its kin keep their k-of-n windows per track (``citysim.control.track_windows``).
     tracking = False
 
     def __init__(self, ctx):
