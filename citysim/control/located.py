@@ -44,7 +44,14 @@ import numpy as np
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
 from citysim.control.detecting import DetectorPerFrame
-from citysim.control.track_windows import TrackWindows
+from citysim.control.track_windows import (
+    PAPER_K,
+    PAPER_N,
+    TrackWindows,
+    fragment_keys,
+    frame_hit,
+    plausible_marks,
+)
 from citysim.world.agents import AgentState
 from citysim.world.coverage import approaches_seen
 from citysim.world.street import Street
@@ -131,6 +138,11 @@ class DetectorLocated(DetectorPerFrame):
     name = "detector_located"
     tracking = True  # it places the detector's tracks on the street
 
+    @classmethod
+    def decisions(cls, spec) -> str:
+        # it counts a frame's own decision while the track is plausible, as detector_confirmed does
+        return "plausible" if cls.decides_per_track(spec) else "frame"
+
     def __init__(self, ctx: ControlContext):
         super().__init__(ctx)
         self.zone_start_m = np.array([s.zone_start_m for s in ctx.street.lamps])
@@ -145,7 +157,11 @@ class DetectorLocated(DetectorPerFrame):
         self.tracks: dict[tuple[int, int], LocatedTrack] = {}  # (camera, track id) -> track
         self.told_s: dict[tuple[int, int], float] = {}  # (camera lamp, lamp told) -> last message time
         self.next_extrapolation_s = 0.0
-        self.windows = [TrackWindows(ctx.spec.k or 2, ctx.spec.n or 6) for _ in ctx.camera_lamps]
+        # the windows detector_confirmed keeps per track: a track is placed from its sixth sighting
+        # by its frames' classes, not only once its pooled class and velocity call it a target
+        full = not getattr(ctx.sensors, "drawn", False)
+        self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full)
+                        for _ in ctx.camera_lamps]  # fmt: skip
         self.lanes = [(lane.y_center_m - lane.width_m / 2 - LANE_SLACK_M, lane.y_center_m + lane.width_m / 2
                        + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
         self.blind_end_lamps = blind_end_lamps(ctx.street) if ctx.spec.light_blind_ends in (None, True) else []
@@ -195,14 +211,13 @@ class DetectorLocated(DetectorPerFrame):
         pose: its detector's) and light for them from the camera's lamp."""
         det = self.detectors[camera_index]
         cam = det.camera
-        hits: dict = {}
+        window = self.windows[camera_index]
+        marks = plausible_marks(detections, det.target_threshold, fragment_keys(detections, window))
+        confirmed = window.update(marks)
         for d in detections:
-            hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
-        confirmed = self.windows[camera_index].update(hits)
-        for d in detections:
-            if d.track_id is None or d.track_id not in confirmed or not det.is_target([d]):
+            if d.track_id is None or d.track_id not in confirmed or not frame_hit(d, det.target_threshold):
                 continue
-            cls = d.track_cls if d.track_cls is not None else d.cls
+            cls = d.track_cls if d.track_target else d.cls  # a young track's pooled class says 'noise'
             if cls == "noise":
                 continue
             if d.ground_x_m is not None:

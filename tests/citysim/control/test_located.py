@@ -5,6 +5,7 @@ from pathlib import Path
 import numpy as np
 
 from citysim.config.scenario import ControllerSpec, load_scenario
+from citysim.control.track_windows import PAPER_N
 from citysim.sim.loop import build_controller, deliver_messages
 from citysim.sim.night import build_night
 from detector.detector import Detection
@@ -36,9 +37,10 @@ def test_a_walker_20_m_ahead_of_camera_k_lights_lamp_k_plus_1():
     h = int(round(feet[1] - head[1]))
     box = (int(round(feet[0])) - 4, int(round(feet[1])) - h + 1, 8, h)
     detection = target_detection(box)
-    controller.place(k, 0.0, [detection])
+    for frame in range(PAPER_N - 1):
+        controller.place(k, frame / 15, [detection])
     night.env.run(until=0.5)
-    assert controller.ctx.network.stats.delivered == 0, "one frame of a track is not confirmed (2 of 6)"
+    assert controller.ctx.network.stats.delivered == 0, "a track seen in 5 frames is not confirmed (seen in 6)"
     controller.place(k, 0.5, [detection])
     night.env.run(until=1.0)  # the radio's latency
     lamps = controller.ctx.lamps
@@ -59,17 +61,35 @@ def test_a_track_that_is_not_a_target_lights_nothing_however_often_seen():
     assert all(lamp.target_level < 1.0 for lamp in controller.ctx.lamps)
 
 
+def test_a_young_track_whose_frames_are_targets_is_placed_from_its_sixth_sighting():
+    # its pooled class still says noise (velocity unknown), its frames say pedestrian: placed as one,
+    # as detector_confirmed would confirm it, without waiting for the track's own verdict
+    scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
+    night = build_night(scenario)
+    controller = build_controller(night, ControllerSpec(name="detector_located", light_blind_ends=False))
+    walker = Detection((150, 150, 10, 30), np.zeros(6), "pedestrian", np.array([0.1, 0.8, 0.05, 0.03, 0.02]), 0.9,
+                       5, track_cls="noise", track_p_target=0.3, track_target=False, track_reason="too few frames",
+                       ground_x_m=90.0, ground_y_m=4.3)  # fmt: skip
+    for frame in range(PAPER_N - 1):
+        controller.place(2, frame / 15, [walker])
+    assert not controller.tracks
+    controller.place(2, (PAPER_N - 1) / 15, [walker])
+    assert controller.tracks[(2, 5)].cls == "pedestrian"
+    assert controller.ctx.lamps[2].target_level == 1.0  # x 90 m: lamp 2's zone (90-120 m), the camera's own
+
+
 def test_the_detectors_ground_velocity_is_used_when_the_track_has_one():
     scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
     night = build_night(scenario)
     controller = build_controller(night, ControllerSpec(name="detector_located"))
     car = target_detection((150, 150, 40, 30), track_id=9, ground_x_m=60.0, ground_y_m=3.0, velocity_x_mps=12.0,
                            velocity_y_mps=0.0, speed_mps=12.0)
-    controller.place(1, 0.0, [car])
-    controller.place(1, 0.1, [car])
+    for frame in range(PAPER_N):
+        controller.place(1, frame / 15, [car])
     track = controller.tracks[(1, 9)]
-    # two positions: too few for the controller's own fit (3 over 0.3 s); the detector's velocity is there
-    assert track.vx_mps == 12.0 and track.last == (0.1, 60.0)
+    # one position since it was confirmed: too few for the controller's own fit (3 over 0.3 s); the
+    # detector's velocity is there
+    assert track.vx_mps == 12.0 and track.last == ((PAPER_N - 1) / 15, 60.0) and len(track.seen) == 1
 
 
 def vehicle_detection(x_m: float, y_m: float, track_id: int = 11) -> Detection:
@@ -86,8 +106,8 @@ def test_a_car_on_the_lane_toward_the_camera_lights_the_zones_it_is_heading_into
     k = 4
     site = night.street.lamps[k]
     x_m = site.x_m + 20.0  # in zone k + 1, on the lane toward -x (y = +1.6 m), coming at camera k
-    for t_s in (0.0, 1 / 15):  # confirmed (2 of 6), too few positions for a velocity of its own
-        controller.place(k, t_s, [vehicle_detection(x_m, 1.6)])
+    for frame in range(PAPER_N):  # confirmed (seen in 6 frames), its position not moving: no velocity of its own
+        controller.place(k, frame / 15, [vehicle_detection(x_m, 1.6)])
     track = controller.tracks[(k, 11)]
     assert track.vx_mps is None and track.heading_vx_mps < 0  # the lane's way, before it is measured
     lamps = controller.ctx.lamps
@@ -96,8 +116,8 @@ def test_a_car_on_the_lane_toward_the_camera_lights_the_zones_it_is_heading_into
     assert all(lamps[j].target_level < 1.0 for j in range(k + 2, len(lamps))), "nothing behind the car"
     # the same car on the other lane (toward +x, going away): nothing toward -x
     other = build_controller(build_night(scenario), ControllerSpec(name="detector_located", light_blind_ends=False))
-    for t_s in (0.0, 1 / 15):
-        other.place(k, t_s, [vehicle_detection(x_m, -1.6)])
+    for frame in range(PAPER_N):
+        other.place(k, frame / 15, [vehicle_detection(x_m, -1.6)])
     assert other.ctx.lamps[k].target_level < 1.0
 
 

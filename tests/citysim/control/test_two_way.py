@@ -8,6 +8,7 @@ import pytest
 
 from citysim.config.base import FieldPathError
 from citysim.config.scenario import ControllerSpec, ScenarioError, load_scenario, override
+from citysim.control.track_windows import PAPER_N
 from citysim.sim.cameras import CameraSchedule
 from citysim.sim.loop import RunError, build_controller, deliver_messages, run_controller
 from citysim.sim.night import build_night
@@ -53,8 +54,8 @@ def test_a_walker_20_m_behind_pole_k_seen_by_its_backward_camera_lights_lamp_k_m
     wrong = night.street.cameras[k].camera.pixel_to_ground(np.array([[*walker_box_feet(cam, behind)]]))[0]
     assert wrong[0] > night.street.lamps[k + 1].zone_start_m
     detection = target_detection(walker_box(cam, behind))
-    controller.place(back_index, 0.0, [detection])
-    controller.place(back_index, 0.5, [detection])  # confirmed: 2 of the last 6 frames
+    for frame in range(PAPER_N):  # confirmed: seen in 6 frames, a target in 2 of them
+        controller.place(back_index, frame / 15, [detection])
     # pixel rounding: at 20 m one image row is ~0.25 m of ground (20^2 / (fy 324 px x 5.5 m)); the box's
     # feet are within a row of the projection, so 0.5 m
     track = controller.tracks[(back_index, 7)]
