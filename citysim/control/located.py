@@ -1,9 +1,10 @@
 """Light where people are going: every confirmed target is placed on the street map.
 
 A lamp camera sees 6-25 m ahead, which is mostly the next lamp's zone, so lighting only the
-camera's own lamp lights the wrong stretch. ``DetectorLocated`` takes each confirmed target
-track of the detector (a target track in k of its last n frames: ``TrackWindows``, as
-``detector_confirmed``), takes its ground position and velocity from the detector's track
+camera's own lamp lights the wrong stretch. ``DetectorLocated`` takes each confirmed track of
+the detector (seen in n frames, a target in k of its last n, no physics rule against it:
+``citysim.control.track_windows``, as ``detector_confirmed``; its class the track's once the
+track is a target, the frame's before), takes its ground position and velocity from the detector's track
 (``detector.tracks``: the bottom-centre pixel through the camera model, world x along the
 street, y across, m; velocity over the track's last half second; detections without a track
 are placed with ``pixel_to_ground`` and their velocity fitted over the last second here), and
