@@ -26,7 +26,8 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
-from operator import add, sub
+from itertools import repeat
+from operator import add, sub, truediv
 
 #: Frames whose class probabilities are pooled into the track's class.
 POOL_FRAMES = 15
@@ -192,10 +193,13 @@ class Track:
     #: reached the frame's bottom edge (``TrackSet``; None: never)
     still_frame: int | None = None
     exit_frame: int | None = None
+    #: frames a velocity difference must span: half the velocity window, at least 2 (from ``fps``)
+    min_span_frames: float = field(init=False, default=2.0)
 
     def __post_init__(self) -> None:
         if self.typical_size_px == (0.0, 0.0):  # until the first frame is noted: the given box
             self.typical_size_px = (self.box_px[2], self.box_px[3])
+        self.min_span_frames = max(2.0, VELOCITY_WINDOW_S * self.fps / 2)
 
     @property
     def speed_mps(self) -> float | None:
@@ -289,9 +293,10 @@ class Track:
         n = len(self.window_logs)
         means = [v / n for v in self.window_log_sums]
         top = max(means)
-        exp = [math.exp(v - top) for v in means]
-        total = sum(exp)
-        return [e / total for e in exp]
+        # maps of math and operator functions, not comprehensions: the same float operations (v - top,
+        # exp, e / total) without a Python function per comprehension, every frame of every track
+        exp = list(map(math.exp, map(sub, means, repeat(top))))
+        return list(map(truediv, exp, repeat(sum(exp))))
 
     def start(self, box_px, ground, features, probabilities) -> None:
         """The first frame's region (the fields the constructor did not set)."""
@@ -318,7 +323,7 @@ class Track:
         window = VELOCITY_WINDOW_S * fps
         while len(positions) > 2 and frame - positions[1][0] >= window:
             positions.popleft()
-        velocity = _median_halves_velocity(positions, fps, self._min_span_frames())
+        velocity = _median_halves_velocity(positions, fps, self.min_span_frames)
         if velocity is None:  # a frame or two of jitter is no velocity
             return
         self.velocity_mps = velocity
@@ -330,10 +335,6 @@ class Track:
             self.speed_sum_mps += math.hypot(*velocity)
             self.speed_frames += 1
 
-    def _min_span_frames(self) -> float:
-        """Frames a difference must span: half the velocity window, at least 2."""
-        return max(2.0, VELOCITY_WINDOW_S * self.fps / 2)
-
     def acceleration_mps2(self) -> float | None:
         """Change of the ground velocity over the last velocity window, m/s^2 (None until known)."""
         velocities = self.velocities
@@ -341,6 +342,6 @@ class Track:
             return None
         f0, a0, b0 = velocities[0]
         f1, a1, b1 = velocities[-1]
-        if f1 - f0 < self._min_span_frames():
+        if f1 - f0 < self.min_span_frames:
             return None
         return math.hypot(a1 - a0, b1 - b0) * self.fps / (f1 - f0)

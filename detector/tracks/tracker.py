@@ -231,7 +231,7 @@ class TrackSet:
             else:
                 survivors.append(track)
         self.tracks = survivors
-        return [self._view(track) for track in views_tracks]
+        return list(map(self._view, views_tracks))
 
     def age(self) -> None:
         """A frame with no region to classify: every track missed."""
