@@ -217,7 +217,8 @@ class TrackSet:
                 seen.add(len(tracks) - 1)
             self._judge(track)
             views_tracks.append(track)
-        absorbed = {t: views_tracks[i].track_id for t, i in p.absorbed}
+        # (most frames join nothing: no comprehension to run for them)
+        absorbed = {t: views_tracks[i].track_id for t, i in p.absorbed} if p.absorbed else {}
         survivors = []
         for t, track in enumerate(tracks):
             if t not in seen:
