@@ -292,10 +292,10 @@ class Detector:
         keep = [j for j, row in enumerate(rows) if row is not None and row[3] <= max_distance_m]
         if not keep:
             return self._nothing()
-        rows = [rows[j] for j in keep]
-        boxes = [boxes[j] for j in keep]
+        if len(keep) < len(rows):  # (the usual frame keeps every region: nothing to pick)
+            rows, boxes, areas = [rows[j] for j in keep], [boxes[j] for j in keep], [areas[j] for j in keep]
         if self.tracks is not None:
-            prepared = self.tracks.prepare(boxes, [areas[j] for j in keep], rows)
+            prepared = self.tracks.prepare(boxes, areas, rows)
             boxes, rows = prepared.boxes_px, prepared.rows
         feats = np.array(rows)
         proba, proba_lists, p_target, labels = self._classify(feats)

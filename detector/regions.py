@@ -7,6 +7,7 @@ frame; contour areas are Green's-theorem areas (``cv2.contourArea``).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from operator import or_
 
 import numpy as np
 
@@ -107,7 +108,7 @@ def few_regions(
     regions = object.__new__(_ListedRegions)
     regions.__dict__.update(
         contours=contours, foreground_fraction=foreground_fraction, mask=mask,
-        lists=(box_rows, area_rows, [t or c for t, c in zip(touch_rows, cut_rows, strict=True)]),
+        lists=(box_rows, area_rows, list(map(or_, touch_rows, cut_rows))),  # bools: or_ is 'or'
         _touch_rows=touch_rows, _cut_rows=cut_rows,
     )  # fmt: skip
     return regions

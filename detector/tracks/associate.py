@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from operator import itemgetter
 
 from detector.tracks.track import Track
 
@@ -62,8 +63,10 @@ def pair_scores(
     tracks: Sequence[Track], boxes_px: Sequence[Sequence[float]], grounds: Sequence, frame: int, gates: Gates
 ) -> list[tuple[float, int, int]]:
     """Allowed (score, track index, region index) pairs."""
-    max_d = max(gates.max_centre_diag, 1e-9)
-    max_ratio = gates.max_area_ratio
+    # the gates as locals: read in the inner loop, every frame
+    min_iou, max_centre_diag, max_ratio = gates.min_iou, gates.max_centre_diag, gates.max_area_ratio
+    base_gate_m, gate_per_m = gates.base_gate_m, gates.gate_per_m
+    max_d = max(max_centre_diag, 1e-9)
     extents = [(bx, by, bx + bw, by + bh, bw * bh, bx + bw / 2, by + bh / 2) for bx, by, bw, bh in boxes_px]
     pairs = []
     for ti, track in enumerate(tracks):
@@ -72,7 +75,7 @@ def pair_scores(
         pcx, pcy = px + pw / 2, py + ph / 2
         diag = max(math.hypot(pw, ph), 1.0)
         pf, pr = track.predicted_ground(frame)
-        gate_m = gates.base_gate_m + gates.gate_per_m * abs(pf)
+        gate_m = base_gate_m + gate_per_m * abs(pf)
         for ri, (bx, by, b_right, b_bottom, b_area, bcx, bcy) in enumerate(extents):
             if b_area * max_ratio < p_area or p_area * max_ratio < b_area:
                 continue
@@ -84,7 +87,7 @@ def pair_scores(
             iou = inter / union if union > 0 else 0.0
             ground = grounds[ri]
             ground_d = math.hypot(ground[0] - pf, ground[1] - pr) if ground is not None else math.inf
-            if iou < gates.min_iou and dist > gates.max_centre_diag and ground_d > gate_m:
+            if iou < min_iou and dist > max_centre_diag and ground_d > gate_m:
                 continue
             near_img = 1.0 - dist / max_d
             near_ground = 1.0 - ground_d / gate_m if gate_m > 0 else 0.0
@@ -109,7 +112,9 @@ def greedy_assign(pairs: list[tuple[float, int, int]], n_items: int) -> list[int
     """
     track_of = [-1] * n_items
     taken = set()
-    for _, ti, ri in sorted(pairs, key=lambda pair: -pair[0]):
+    # reverse keeps the sort stable (tied pairs in their listed order), as a key of -score does, for
+    # finite scores (both callers': IoU plus nearnesses clipped at 0); itemgetter is no Python call
+    for _, ti, ri in sorted(pairs, key=itemgetter(0), reverse=True):
         if ti not in taken and track_of[ri] < 0:
             track_of[ri] = ti
             taken.add(ti)

@@ -38,11 +38,14 @@ class GroundProjector:
         """(forward_m, right_m) of each box's bottom centre; None where it has no ground point."""
         if not boxes_px:
             return []
-        pts = [(x + w / 2 - 0.5, y + h - 0.5) for x, y, w, h in boxes_px]
-        if self.geometry.distorted:
-            pts = self.geometry.undistort(np.array(pts, np.float64)).tolist()
+        distorted = self.geometry.distorted
+        if distorted:
+            centres_px = [(x + w / 2 - 0.5, y + h - 0.5) for x, y, w, h in boxes_px]
+            undistorted_px = self.geometry.undistort(np.array(centres_px, np.float64)).tolist()
         out: list[tuple[float, float] | None] = []
-        for u, v in pts:
+        # the bottom centres taken in this loop, not listed first, where the lens does not distort
+        for k, (x, y, w, h) in enumerate(boxes_px):
+            u, v = undistorted_px[k] if distorted else (x + w / 2 - 0.5, y + h - 0.5)
             b = (v - self.cy_px) / self.fy_px
             alpha = self.tilt_rad + math.atan(b)
             if not alpha > MIN_DEPRESSION_RAD:

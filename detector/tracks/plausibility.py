@@ -90,18 +90,20 @@ def front_aspect() -> float:
 FRONT_ASPECT = front_aspect()
 
 
-def _outside(value: float, lo: float, hi: float) -> float:
-    """How far ``value`` lies outside [lo, hi], relative to the nearer bound (0 inside)."""
-    if value < lo:
-        return (lo - value) / lo
-    if value > hi:
-        return (value - hi) / hi
-    return 0.0
+#: ``APPARENT_SIZES_M``' bounds as flat (width lo, width hi, height lo, height hi) rows, m
+_APPARENT_BOUNDS_M = tuple((*w, *h) for w, h in APPARENT_SIZES_M.values())
 
 
 def table1_misfit(width_m: float, height_m: float) -> float:
     """The smallest relative distance of (width, height) from a Table 1 class's apparent sizes (0: fits one)."""
-    return min(_outside(width_m, *w) + _outside(height_m, *h) for w, h in APPARENT_SIZES_M.values())
+    # per class: how far each value lies outside its [lo, hi], relative to the nearer bound (0
+    # inside); written out in one comprehension, as this runs every frame of every track and ten
+    # calls of a helper cost more than the arithmetic
+    return min([
+        ((w_lo - width_m) / w_lo if width_m < w_lo else (width_m - w_hi) / w_hi if width_m > w_hi else 0.0)
+        + ((h_lo - height_m) / h_lo if height_m < h_lo else (height_m - h_hi) / h_hi if height_m > h_hi else 0.0)
+        for w_lo, w_hi, h_lo, h_hi in _APPARENT_BOUNDS_M
+    ])  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -183,11 +185,12 @@ def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     if track.sightings < limits.min_frames or track.velocity_mps is None:
         return "too few frames"
     speed = track.speed_mps
-    if speed is not None and speed > limits.max_speed_mps:
+    if speed > limits.max_speed_mps:
         return "too fast"
-    if sum(track.accel_violations) >= limits.max_accel_violations:
+    # the windows hold bools: count them in C (sum() adds them one by one)
+    if track.accel_violations.count(True) >= limits.max_accel_violations:
         return "erratic"
-    if sum(track.box_jumps) >= limits.max_box_jumps:
+    if track.box_jumps.count(True) >= limits.max_box_jumps:
         return "jumping"
     heights = track.heights_m
     if table1_misfit(median(track.widths_m), median(heights)) > limits.size_tolerance:
@@ -195,12 +198,14 @@ def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     n = len(heights)
     if n >= limits.min_frames:
         mean_m = sum(heights) / n
-        variance = sum((h - mean_m) ** 2 for h in heights) / n
+        variance = sum([(h - mean_m) ** 2 for h in heights]) / n
         if mean_m <= 0 or variance > (limits.max_height_variation * mean_m) ** 2:
             return "size unsteady"
     if 2 * track.wide_frames > track.head_on_frames > 0:
         return "too wide for its heading"
-    if _sways(track, limits):
+    # only a track under the still limit can sway (_sways' own test, made here to skip the call for
+    # the moving ones; 'not >=' as there)
+    if not speed >= limits.still_mps and _sways(track, limits):
         return "oscillating in place"
     return None
 

@@ -26,6 +26,8 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from itertools import repeat
+from operator import add, sub, truediv
 
 #: Frames whose class probabilities are pooled into the track's class.
 POOL_FRAMES = 15
@@ -111,14 +113,16 @@ def _median_halves_velocity(positions, fps: float, min_span_frames: float) -> tu
     """
     items = list(positions)
     n = len(items)
-    older, newer = items[: n // 2], items[n - n // 2:]
-    span_frames = median([p[0] for p in newer]) - median([p[0] for p in older])
+    # each half's columns in one transpose, not a list per column (this runs every frame of every track)
+    older_frames, older_forward_m, older_right_m = zip(*items[: n // 2], strict=True)
+    newer_frames, newer_forward_m, newer_right_m = zip(*items[n - n // 2:], strict=True)
+    span_frames = median(newer_frames) - median(older_frames)
     if span_frames < min_span_frames:
         return None
     dt_s = span_frames / fps
     return (
-        (median([p[1] for p in newer]) - median([p[1] for p in older])) / dt_s,
-        (median([p[2] for p in newer]) - median([p[2] for p in older])) / dt_s,
+        (median(newer_forward_m) - median(older_forward_m)) / dt_s,
+        (median(newer_right_m) - median(older_right_m)) / dt_s,
     )
 
 
@@ -189,10 +193,13 @@ class Track:
     #: reached the frame's bottom edge (``TrackSet``; None: never)
     still_frame: int | None = None
     exit_frame: int | None = None
+    #: frames a velocity difference must span: half the velocity window, at least 2 (from ``fps``)
+    min_span_frames: float = field(init=False, default=2.0)
 
     def __post_init__(self) -> None:
         if self.typical_size_px == (0.0, 0.0):  # until the first frame is noted: the given box
             self.typical_size_px = (self.box_px[2], self.box_px[3])
+        self.min_span_frames = max(2.0, VELOCITY_WINDOW_S * self.fps / 2)
 
     @property
     def speed_mps(self) -> float | None:
@@ -270,12 +277,14 @@ class Track:
             self.log_sums, self.window_log_sums = list(logs), list(logs)
             self.window_logs.append(logs)
             return
-        self.log_sums = [a + b for a, b in zip(self.log_sums, logs, strict=True)]
+        # element by element in C (map of operator's add and sub), the same float operations as
+        # comprehensions over zip, for a fraction of the bytecode: this runs every frame of every track
+        self.log_sums = list(map(add, self.log_sums, logs))
         sums = self.window_log_sums
         if len(self.window_logs) == self.window_logs.maxlen:  # the oldest frame leaves the window
-            sums = [a - b for a, b in zip(sums, self.window_logs[0], strict=True)]
+            sums = map(sub, sums, self.window_logs[0])
         self.window_logs.append(logs)
-        self.window_log_sums = [a + b for a, b in zip(sums, logs, strict=True)]
+        self.window_log_sums = list(map(add, sums, logs))
 
     def pooled_probabilities(self, pooling: str = "mean_log") -> list[float]:
         """``pool_probabilities`` of the window; ``mean_log`` from the running sums (O(classes))."""
@@ -284,9 +293,10 @@ class Track:
         n = len(self.window_logs)
         means = [v / n for v in self.window_log_sums]
         top = max(means)
-        exp = [math.exp(v - top) for v in means]
-        total = sum(exp)
-        return [e / total for e in exp]
+        # maps of math and operator functions, not comprehensions: the same float operations (v - top,
+        # exp, e / total) without a Python function per comprehension, every frame of every track
+        exp = list(map(math.exp, map(sub, means, repeat(top))))
+        return list(map(truediv, exp, repeat(sum(exp))))
 
     def start(self, box_px, ground, features, probabilities) -> None:
         """The first frame's region (the fields the constructor did not set)."""
@@ -306,27 +316,24 @@ class Track:
         self.typical_size_px = (median(self.widths_px), median(self.heights_px))
 
     def _update_velocity(self, frame: int) -> None:
-        positions = self.positions
-        positions.append((frame, self.forward_m, self.right_m))
-        self.path.append((frame, self.forward_m, self.right_m))
-        window = VELOCITY_WINDOW_S * self.fps
+        positions, fps = self.positions, self.fps
+        position = (frame, self.forward_m, self.right_m)  # one (immutable) tuple for both windows
+        positions.append(position)
+        self.path.append(position)
+        window = VELOCITY_WINDOW_S * fps
         while len(positions) > 2 and frame - positions[1][0] >= window:
             positions.popleft()
-        velocity = _median_halves_velocity(positions, self.fps, self._min_span_frames())
+        velocity = _median_halves_velocity(positions, fps, self.min_span_frames)
         if velocity is None:  # a frame or two of jitter is no velocity
             return
         self.velocity_mps = velocity
         velocities = self.velocities
-        velocities.append((frame, *self.velocity_mps))
+        velocities.append((frame, *velocity))
         while len(velocities) > 2 and frame - velocities[1][0] >= window:
             velocities.popleft()
         if not self.settling:
-            self.speed_sum_mps += math.hypot(*self.velocity_mps)
+            self.speed_sum_mps += math.hypot(*velocity)
             self.speed_frames += 1
-
-    def _min_span_frames(self) -> float:
-        """Frames a difference must span: half the velocity window, at least 2."""
-        return max(2.0, VELOCITY_WINDOW_S * self.fps / 2)
 
     def acceleration_mps2(self) -> float | None:
         """Change of the ground velocity over the last velocity window, m/s^2 (None until known)."""
@@ -335,6 +342,6 @@ class Track:
             return None
         f0, a0, b0 = velocities[0]
         f1, a1, b1 = velocities[-1]
-        if f1 - f0 < self._min_span_frames():
+        if f1 - f0 < self.min_span_frames:
             return None
         return math.hypot(a1 - a0, b1 - b0) * self.fps / (f1 - f0)

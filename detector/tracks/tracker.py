@@ -31,8 +31,10 @@ each track are kept as bits for k-of-n confirmation (``is_confirmed``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from detector.camera import CameraModel
 from detector.features import RegionGeometry
@@ -59,9 +61,11 @@ _DEFAULT_GATES = Gates()
 _DEFAULT_REUNITE = ReuniteParams()
 
 
-@dataclass(frozen=True, slots=True)
-class TrackView:
-    """What a region's track says about it this frame (world ground frame, m and m/s)."""
+class TrackView(NamedTuple):
+    """What a region's track says about it this frame (world ground frame, m and m/s).
+
+    A named tuple, not a frozen dataclass: one is made per region per frame, and a frozen
+    dataclass sets its ten fields one call at a time (0.8 us against 0.2 us, measured)."""
 
     track_id: int
     cls: str
@@ -120,11 +124,14 @@ class TrackSet:
         self.ground = GroundProjector(camera, self.geometry)
         self.class_names = list(class_names)
         self.noise_col = self.class_names.index("noise")
+        self._target_cols = [c for c in range(len(self.class_names)) if c != self.noise_col]
         self.target_threshold = float(target_threshold)
         self.limits, self.gates, self.reunite, self.pooling = limits, gates, reunite, pooling
         self.motion = motion
         self.max_missed_frames = int(max_missed_frames)
         self.still_hold_frames = round(still_hold_s * camera.fps)
+        # a track missed no more frames than either limit is kept without asking which applies
+        self._surely_kept_frames = min(self.max_missed_frames, self.still_hold_frames)
         self.confirm_k, self.confirm_n = int(confirm_k), int(confirm_n)
         self._mask = (1 << self.confirm_n) - 1
         self.keep_ended = keep_ended
@@ -210,7 +217,8 @@ class TrackSet:
                 seen.add(len(tracks) - 1)
             self._judge(track)
             views_tracks.append(track)
-        absorbed = {t: views_tracks[i].track_id for t, i in p.absorbed}
+        # (most frames join nothing: no comprehension to run for them)
+        absorbed = {t: views_tracks[i].track_id for t, i in p.absorbed} if p.absorbed else {}
         survivors = []
         for t, track in enumerate(tracks):
             if t not in seen:
@@ -219,12 +227,12 @@ class TrackSet:
             if t in absorbed and t not in seen:
                 track.merged_into = absorbed[t]
                 self._end(track)
-            elif track.missed > self._missed_limit(track):
+            elif track.missed > self._surely_kept_frames and track.missed > self._missed_limit(track):
                 self._end(track)
             else:
                 survivors.append(track)
         self.tracks = survivors
-        return [self._view(track) for track in views_tracks]
+        return list(map(self._view, views_tracks))
 
     def age(self) -> None:
         """A frame with no region to classify: every track missed."""
@@ -236,7 +244,7 @@ class TrackSet:
         for track in self.tracks:
             track.missed += 1
             track.hit_bits = (track.hit_bits << 1) & mask
-            if track.missed > self._missed_limit(track):
+            if track.missed > self._surely_kept_frames and track.missed > self._missed_limit(track):
                 self._end(track)
             else:
                 survivors.append(track)
@@ -252,21 +260,21 @@ class TrackSet:
         return self.still_hold_frames if stood and not left else self.max_missed_frames
 
     def _judge(self, track: Track) -> None:
-        note_acceleration(track, self.limits)
-        note_jump(track, self.limits)
-        note_heading(track, self.limits)
+        limits = self.limits
+        note_acceleration(track, limits)
+        note_jump(track, limits)
+        note_heading(track, limits)
         speed = track.speed_mps
-        if speed is not None and speed < self.limits.still_mps:
+        if speed is not None and speed < limits.still_mps:
             track.still_frame = track.last_frame
         _, y, _, h = track.box_px
         if y + h >= self.exit_row_px:
             track.exit_frame = track.last_frame
         track.pooled = pooled = track.pooled_probabilities(self.pooling)
         track.p_target = 1.0 - pooled[self.noise_col]
-        noise, sums = self.noise_col, track.log_sums
-        best = max((c for c in range(len(sums)) if c != noise), key=sums.__getitem__)
-        track.cls = self.class_names[best]  # the likeliest target class over its life
-        reason = reject_reason(track, self.limits)
+        # the likeliest target class over its life (the first of equals, as max takes it)
+        track.cls = self.class_names[max(self._target_cols, key=track.log_sums.__getitem__)]
+        reason = reject_reason(track, limits)
         if reason is None and track.p_target < self.target_threshold:
             reason = "classified noise"
         # a steady vehicle's motion outweighs frames that look like noise (a car's headlight spot)
@@ -285,12 +293,14 @@ class TrackSet:
             track.reasons[reason] = track.reasons.get(reason, 0) + 1
 
     def _view(self, track: Track) -> TrackView:
-        x_m, y_m = self.ground.to_world(track.forward_m, track.right_m)
-        if track.velocity_mps is None:
+        ground = self.ground
+        x_m, y_m = ground.to_world(track.forward_m, track.right_m)
+        velocity = track.velocity_mps
+        if velocity is None:
             vx = vy = speed = None
         else:
-            vx, vy = self.ground.velocity_to_world(*track.velocity_mps)
-            speed = track.speed_mps
+            vx, vy = ground.velocity_to_world(*velocity)
+            speed = math.hypot(*velocity)  # track.speed_mps without the property's second look-up
         cls = track.cls if track.target else "noise"
         return TrackView(track.track_id, cls, track.p_target, track.target, track.reason, x_m, y_m, vx, vy, speed)
 
