@@ -180,7 +180,7 @@ def note_heading(track: Track, limits: PlausibilityLimits) -> None:
 
 def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     """Why no road user could have made ``track`` (None: one could)."""
-    if sum(track.box_jumps) >= limits.max_box_jumps and track.velocity_mps is None:
+    if track.box_jumps.count(True) >= limits.max_box_jumps and track.velocity_mps is None:
         return "jumping"  # said as soon as seen: an insect's mark before its velocity is known
     if track.sightings < limits.min_frames or track.velocity_mps is None:
         return "too few frames"
