@@ -141,8 +141,13 @@ class DetectorLocated(DetectorPerFrame):
 
     @classmethod
     def decisions(cls, spec) -> str:
-        # it counts a frame's own decision while the track is plausible, as detector_confirmed does
-        return "plausible" if cls.decides_per_track(spec) else "frame"
+        # It counts a frame's own decision while the track is plausible, as detector_confirmed does,
+        # but fast mode draws it from the track decisions' tables: measured over 1,200 s (seed 1,
+        # model v14), the plausible tables' false alarms (10.9 per camera-hour, each placed and lit
+        # ahead with a lane's prior speed) made fast detector_located save 22.0 % at 22:00 and
+        # 38.1 % at 02:00 against full fidelity's 25.8 % and 52.6 %; the track tables 28.7 % and
+        # 52.7 %, lighting the same share of entries on entry (93.9 % and 86.0 %).
+        return "track" if cls.decides_per_track(spec) else "frame"
 
     def __init__(self, ctx: ControlContext):
         super().__init__(ctx)
