@@ -180,6 +180,18 @@ def moth_frame(clip: Clip, box, rng) -> np.ndarray:
     return np.clip(img + 170.0 * layer, 0, 255).astype(np.uint8)
 
 
+def moth_sequence(clip: Clip, frames, rng) -> list[np.ndarray]:
+    """The moth of ``frames`` twice over (it loops back), drawn into ``clip``'s frames; the frames
+    it was not segmented in left empty."""
+    boxes = {frame: box for frame, box, *_ in frames}
+    first, span = frames[0][0], frames[-1][0] - frames[0][0] + 1
+    out = []
+    for k in range(2 * span + 1):
+        box = boxes.get(first + k % span)
+        out.append(moth_frame(clip, box, rng) if box is not None else clip.frame())
+    return out
+
+
 @pytest.fixture(scope="module")
 def model():
     return default_model()
@@ -192,14 +204,9 @@ def test_a_moth_drawn_along_those_boxes_never_becomes_a_target_track(model, fram
     clip = Clip(cam, seed=seed)
     det = Detector(cam, model=model)
     clip.warm_up(det)
-    rng = np.random.default_rng(seed)
-    boxes = {frame: box for frame, box, *_ in frames}
-    first = frames[0][0]
     per_frame_targets = 0
-    # the moth twice over (it loops back), with the frames it was not segmented left empty
-    for k in range(2 * (frames[-1][0] - first + 1) + 1):
-        box = boxes.get(first + k % (frames[-1][0] - first + 1))
-        detections = det.process(moth_frame(clip, box, rng) if box is not None else clip.frame())
+    for image in moth_sequence(clip, frames, np.random.default_rng(seed)):
+        detections = det.process(image)
         per_frame_targets += any(d.p_target >= 0.5 for d in detections)
         assert not any(d.track_target for d in detections), [(d.track_reason, d.box_px) for d in detections]
     # the frames alone are read as road users: it is the track that says no

@@ -29,7 +29,7 @@ from tests.detector.clips import Clip
 from tests.detector.test_track_insects import (
     CROSSING_MOTH,
     LOOPING_MOTH,
-    moth_frame,
+    moth_sequence,
     suburban_camera,
 )
 
@@ -111,14 +111,7 @@ def test_a_moth_at_the_emitter_never_confirms_a_track(model, moth, seed):
     clip = Clip(cam, seed=seed)
     detector = Detector(cam, model=model)
     clip.warm_up(detector)
-    rng = np.random.default_rng(seed)
-    boxes = {frame: box for frame, box, *_ in moth}
-    first, span = moth[0][0], moth[-1][0] - moth[0][0] + 1
-    frames = []
-    for k in range(2 * span + 1):  # the moth twice over, the frames it was not segmented left empty
-        box = boxes.get(first + k % span)
-        frames.append(moth_frame(clip, box, rng) if box is not None else clip.frame())
-    n_track, n_frame = confirmations(detector, frames)
+    n_track, n_frame = confirmations(detector, moth_sequence(clip, moth, np.random.default_rng(seed)))
     assert n_track == 0
     assert n_frame >= 1, "the frame-by-frame window is fooled: the moth looks like a road user"
 
