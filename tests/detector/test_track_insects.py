@@ -180,6 +180,15 @@ def moth_frame(clip: Clip, box, rng) -> np.ndarray:
     return np.clip(img + 170.0 * layer, 0, 255).astype(np.uint8)
 
 
+def warmed_up(model, seed: int) -> tuple[Clip, Detector]:
+    """A clip of the suburban camera and a detector on it whose background has been learnt."""
+    cam = suburban_camera()
+    clip = Clip(cam, seed=seed)
+    det = Detector(cam, model=model)
+    clip.warm_up(det)
+    return clip, det
+
+
 def moth_sequence(clip: Clip, frames, rng) -> list[np.ndarray]:
     """The moth of ``frames`` twice over (it loops back), drawn into ``clip``'s frames; the frames
     it was not segmented in left empty."""
@@ -200,10 +209,7 @@ def model():
 @pytest.mark.parametrize("frames", [LOOPING_MOTH, CROSSING_MOTH], ids=["looping", "crossing"])
 @pytest.mark.parametrize("seed", range(3))
 def test_a_moth_drawn_along_those_boxes_never_becomes_a_target_track(model, frames, seed):
-    cam = suburban_camera()
-    clip = Clip(cam, seed=seed)
-    det = Detector(cam, model=model)
-    clip.warm_up(det)
+    clip, det = warmed_up(model, seed)
     per_frame_targets = 0
     for image in moth_sequence(clip, frames, np.random.default_rng(seed)):
         detections = det.process(image)
@@ -215,10 +221,7 @@ def test_a_moth_drawn_along_those_boxes_never_becomes_a_target_track(model, fram
 
 def test_the_suburban_camera_still_sees_a_walker(model):
     # a walker coming toward the camera from 14 m, as on suburban_night's sidewalks
-    cam = suburban_camera()
-    clip = Clip(cam, seed=5)
-    det = Detector(cam, model=model)
-    clip.warm_up(det)
+    clip, det = warmed_up(model, 5)
     targets, reasons = 0, set()
     for k in range(45):
         t_s = k / 15.0

@@ -25,12 +25,11 @@ from citysim.control.track_windows import (
 from detector.detector import Detector
 from detector.general_model import default_model
 from detector.train.shapes import pedestrian_shape
-from tests.detector.clips import Clip
 from tests.detector.test_track_insects import (
     CROSSING_MOTH,
     LOOPING_MOTH,
     moth_sequence,
-    suburban_camera,
+    warmed_up,
 )
 
 
@@ -107,10 +106,7 @@ def confirmations(detector: Detector, frames) -> tuple[int, int]:
 @pytest.mark.parametrize("moth", [LOOPING_MOTH, CROSSING_MOTH], ids=["looping", "crossing"])
 @pytest.mark.parametrize("seed", range(3))
 def test_a_moth_at_the_emitter_never_confirms_a_track(model, moth, seed):
-    cam = suburban_camera()
-    clip = Clip(cam, seed=seed)
-    detector = Detector(cam, model=model)
-    clip.warm_up(detector)
+    clip, detector = warmed_up(model, seed)
     n_track, n_frame = confirmations(detector, moth_sequence(clip, moth, np.random.default_rng(seed)))
     assert n_track == 0
     assert n_frame >= 1, "the frame-by-frame window is fooled: the moth looks like a road user"
@@ -118,10 +114,7 @@ def test_a_moth_at_the_emitter_never_confirms_a_track(model, moth, seed):
 
 @pytest.mark.slow
 def test_a_walker_is_confirmed_by_the_seventh_frame(model):
-    cam = suburban_camera()
-    clip = Clip(cam, seed=5)
-    detector = Detector(cam, model=model)
-    clip.warm_up(detector)
+    clip, detector = warmed_up(model, 5)
     frames = []
     for k in range(30):
         t_s = k / 15.0
