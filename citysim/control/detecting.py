@@ -25,6 +25,7 @@ from citysim.control.track_windows import (
     TrackWindows,
     fragment_keys,
     plausible_marks,
+    windows_wait,
 )
 
 
@@ -88,7 +89,7 @@ class DetectorConfirmed(DetectorPerFrame):
 
     name = "detector_confirmed"
     tracking = True
-    #: per track, a track's window must span n frames of its life before it confirms
+    #: per track, a track must be seen in n frames before it confirms
     window_must_fill = True
 
     @classmethod
@@ -101,9 +102,8 @@ class DetectorConfirmed(DetectorPerFrame):
         super().__init__(ctx)
         self.k = ctx.spec.k or PAPER_K
         self.n = ctx.spec.n or PAPER_N
-        # per track, a track's window must span n frames before it confirms (TrackWindows); fast
-        # mode's plausible tables already hold that wait (citysim.fast.records)
-        full = self.window_must_fill and self.decides_per_track(ctx.spec) and not getattr(ctx.sensors, "drawn", False)
+        # per track, a track must be seen in n frames before it confirms (TrackWindows)
+        full = self.window_must_fill and self.decides_per_track(ctx.spec) and windows_wait(ctx.sensors)
         self.windows = [TrackWindows(self.k, self.n, full_window=full) for _ in ctx.camera_lamps]
 
     def confirmed_tracks(self, camera_index, detections) -> set:

@@ -52,6 +52,7 @@ from citysim.control.track_windows import (
     fragment_keys,
     frame_hit,
     plausible_marks,
+    windows_wait,
 )
 from citysim.world.agents import AgentState
 from citysim.world.coverage import approaches_seen
@@ -165,7 +166,7 @@ class DetectorLocated(DetectorPerFrame):
         self.next_extrapolation_s = 0.0
         # the windows detector_confirmed keeps per track: a track is placed from its sixth sighting
         # by its frames' classes, not only once its pooled class and velocity call it a target
-        full = not getattr(ctx.sensors, "drawn", False)
+        full = windows_wait(ctx.sensors)
         self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full)
                         for _ in ctx.camera_lamps]  # fmt: skip
         self.lanes = [(lane.y_center_m - lane.width_m / 2 - LANE_SLACK_M, lane.y_center_m + lane.width_m / 2

@@ -115,3 +115,10 @@ class TrackWindows:
         """Whether track ``key`` has been seen in enough frames to be confirmed (always without
         ``full_window``; detections without a track share one window, always seen enough)."""
         return not self.min_seen or key is None or self.seen.get(key, (0, 0))[0] >= self.min_seen
+
+
+def windows_wait(sensors) -> bool:
+    """Whether a controller's per-track windows must wait for n sightings themselves: yes for the
+    real detector; no for fast mode's drawn detections (``ctx.sensors.drawn``), whose calibrated
+    tables already leave out the hits of tracks not yet seen enough (``citysim.fast.records``)."""
+    return not getattr(sensors, "drawn", False)
