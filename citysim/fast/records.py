@@ -132,7 +132,7 @@ class CalibrationRecorder(Collector):
         self.levels = np.zeros(geometry.n)
         self.changes = LevelChanges(geometry)
         self._placed = None
-        # each camera's tracks' ages, counted as detector_confirmed's windows count them
+        # each camera's tracks' sightings and windows, kept as detector_confirmed keeps them
         self.windows = [TrackWindows(PAPER_K, PAPER_N, full_window=True) for _ in range(geometry.n)]
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
