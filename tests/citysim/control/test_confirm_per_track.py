@@ -125,4 +125,5 @@ def test_a_walker_is_confirmed_by_the_seventh_frame(model):
         detections = detector.process(image)
         if per_track.update(plausible_marks(detections, 0.5, fragment_keys(detections, per_track))):
             confirmed_at = k if confirmed_at is None else confirmed_at
-    assert confirmed_at is not None and confirmed_at <= 7, confirmed_at
+    # seen in 6 frames at the earliest (index 5); one frame of slack for a frame segmented differently
+    assert confirmed_at is not None and confirmed_at <= 6, confirmed_at
