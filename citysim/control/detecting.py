@@ -23,8 +23,8 @@ from citysim.control.track_windows import (
     PAPER_K,
     PAPER_N,
     TrackWindows,
-    fragment_keys,
-    plausible_marks,
+    frame_hit,
+    keyed_marks,
     windows_wait,
 )
 
@@ -111,11 +111,10 @@ class DetectorConfirmed(DetectorPerFrame):
         window = self.windows[camera_index]
         return window.update(self.marks(self.detectors[camera_index], detections, window))
 
-    def marks(self, det, detections, window: TrackWindows | None = None) -> dict:
+    def marks(self, det, detections, window: TrackWindows) -> dict:
         """This frame's ``{track key: hit?}``: per frame, any target; per track, ``frame_hit``, young
-        fragments counted for the established track they stand on (with ``window``)."""
-        keys = fragment_keys(detections, window) if window is not None else None
-        return plausible_marks(detections, det.target_threshold, keys)
+        fragments counted for the established track they stand on."""
+        return keyed_marks(detections, det.target_threshold, window)[1]
 
     def confirmed(self, camera_index, detections) -> bool:
         return bool(self.confirmed_tracks(camera_index, detections))
@@ -136,7 +135,7 @@ class DetectorTracked(DetectorConfirmed):
     #: a target track is plausible by definition: no young-track wait
     window_must_fill = False
 
-    def marks(self, det, detections, window: TrackWindows | None = None) -> dict:
+    def marks(self, det, detections, window: TrackWindows) -> dict:
         hits: dict = {}  # only frames of a track already judged a target count
         for d in detections:
             hits[d.track_id] = hits.get(d.track_id, False) or det.is_target([d])
@@ -190,7 +189,7 @@ class DetectorNetwork(DetectorConfirmed):
         det = self.detectors[camera_index]
         # the confirmed tracks' detections that are hits this frame (as their windows count them)
         targets = [d for d in detections
-                   if d.track_id in confirmed and d.cls != "noise" and self.marks(det, [d]).get(d.track_id)]
+                   if d.track_id in confirmed and d.cls != "noise" and frame_hit(d, det.target_threshold)]
         if not targets or t_s - self.last_sent_s[camera_index] < self.repeat_s:
             if targets:
                 # keep tracking directions between notifications

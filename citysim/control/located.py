@@ -49,9 +49,8 @@ from citysim.control.track_windows import (
     PAPER_K,
     PAPER_N,
     TrackWindows,
-    fragment_keys,
     frame_hit,
-    plausible_marks,
+    keyed_marks,
     windows_wait,
 )
 from citysim.world.agents import AgentState
@@ -219,8 +218,7 @@ class DetectorLocated(DetectorPerFrame):
         det = self.detectors[camera_index]
         cam = det.camera
         window = self.windows[camera_index]
-        marks = plausible_marks(detections, det.target_threshold, fragment_keys(detections, window))
-        confirmed = window.update(marks)
+        confirmed = window.update(keyed_marks(detections, det.target_threshold, window)[1])
         for d in detections:
             if d.track_id is None or d.track_id not in confirmed or not frame_hit(d, det.target_threshold):
                 continue

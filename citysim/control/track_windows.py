@@ -53,6 +53,13 @@ def plausible_marks(detections, threshold: float, keys: list | None = None) -> d
     return marks
 
 
+def keyed_marks(detections, threshold: float, window: TrackWindows) -> tuple[list, dict]:
+    """Each detection's window key (``fragment_keys``) and the frame's marks by those keys
+    (``plausible_marks``), before ``window.update``."""
+    keys = fragment_keys(detections, window)
+    return keys, plausible_marks(detections, threshold, keys)
+
+
 def fragment_keys(detections, window: TrackWindows) -> list:
     """Each detection's window key: its track id, or, for a track not yet seen enough (``window``)
     standing within ``FRAGMENT_M`` of an established plausible track's detection on the ground,

@@ -22,9 +22,8 @@ from citysim.control.track_windows import (
     PAPER_K,
     PAPER_N,
     TrackWindows,
-    fragment_keys,
     frame_hit,
-    plausible_marks,
+    keyed_marks,
 )
 from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
@@ -187,8 +186,7 @@ class CalibrationRecorder(Collector):
     def _targets(self, lamp_index: int, detections: Sequence) -> dict[str, list]:
         """This frame's target detections under each decision set (``DECISION_PREFIXES``)."""
         threshold, window = self.target_threshold, self.windows[lamp_index]
-        keys = fragment_keys(detections, window)
-        marks = plausible_marks(detections, threshold, keys)
+        keys, marks = keyed_marks(detections, threshold, window)
         window.update(marks)
         return {"": [d for d in detections if d.p_target >= threshold],
                 "track_": [d for d in detections if _track_target(d, threshold)],
