@@ -29,7 +29,7 @@ from citysim.control.track_windows import (
 )
 
 
-def _cls(d) -> str:
+def detection_class(d) -> str:
     """A detection's class: its track's pooled one when its track is a target, else its frame's
     (a track not yet judged is 'noise' by its pooled class, but its frame may say 'vehicle')."""
     return d.track_cls if d.track_target else d.cls
@@ -196,16 +196,16 @@ class DetectorNetwork(DetectorConfirmed):
                 for d in targets:
                     self._direction(camera_index, t_s, d)
             return detections
-        best = max(targets, key=lambda d: self.lamps_ahead.get(_cls(d), 1))
+        best = max(targets, key=lambda d: self.lamps_ahead.get(detection_class(d), 1))
         direction = self._direction(camera_index, t_s, best)
-        ahead = self.lamps_ahead.get(_cls(best), 1)
+        ahead = self.lamps_ahead.get(detection_class(best), 1)
         n = len(self.ctx.lamps)
         if direction == 0:
             receivers = [j for j in range(lamp_index - ahead, lamp_index + ahead + 1) if 0 <= j < n and j != lamp_index]
         else:
             receivers = [lamp_index + direction * k for k in range(1, ahead + 1) if 0 <= lamp_index + direction * k < n]
         if receivers:
-            self.ctx.network.send(lamp_index, receivers, "light", {"cls": _cls(best)})
+            self.ctx.network.send(lamp_index, receivers, "light", {"cls": detection_class(best)})
             self.last_sent_s[camera_index] = t_s
         return detections
 

@@ -44,7 +44,7 @@ import numpy as np
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
-from citysim.control.detecting import DetectorPerFrame
+from citysim.control.detecting import DetectorPerFrame, detection_class
 from citysim.control.track_windows import (
     PAPER_K,
     PAPER_N,
@@ -222,7 +222,7 @@ class DetectorLocated(DetectorPerFrame):
         for d in detections:
             if d.track_id is None or d.track_id not in confirmed or not frame_hit(d, det.target_threshold):
                 continue
-            cls = d.track_cls if d.track_target else d.cls  # a young track's pooled class says 'noise'
+            cls = detection_class(d)  # a young track's pooled class says 'noise': its frame's then
             if cls == "noise":
                 continue
             if d.ground_x_m is not None:
