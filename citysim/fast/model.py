@@ -17,13 +17,14 @@ whether the detector found each), it holds:
   one starts (``fa_start_p``, by the camera's own lamp lit or dim), how many judged frames it
   lasts, and where it is reported (distance, box, class), as samples.
 * ``track``: the same hit, persistence, class and false-alarm tables fitted on the detector's
-  track decisions (a detection is a target when its track is: ``detector_tracked`` and
-  ``detector_located``) rather than each frame's own (``detector``, ``detector_confirmed``);
-  Insects seldom make a plausible target track, so the two false-alarm rates differ several-fold.
-* ``plausible``: the same again on the frames ``detector_confirmed`` counts per track: a frame's
-  own target decision while no physics rule rules its track out, from the frame its track's
-  k-of-n window spans n frames of its life (``citysim.control.detecting.TrackWindows``; the wait
-  is in the tables, so fast mode's windows do not wait again).
+  track decisions (a detection is a target when its track is: ``detector_tracked``, and fast
+  mode's ``detector_located``) rather than each frame's own (``detector``; any controller with
+  ``tracking: false``). Insects seldom make a plausible target track, so the two false-alarm rates
+  differ several-fold.
+* ``plausible``: the same again on the frames ``detector_confirmed`` and ``detector_network``
+  count per track: a frame's own target decision while no physics rule rules its track out, from
+  the track's n-th sighting on (``citysim.control.track_windows``; the wait is in the tables, so
+  fast mode's windows do not wait again).
   ``for_decisions()`` gives the model a controller draws from.
 * ``p_regions_idle``: P(a frame with no candidate holds some moving region) (keeps the camera
   judged every frame, as in full fidelity).
@@ -84,8 +85,10 @@ MAX_AREA_PERSISTENCE = 0.99
 #: 5 s, 5-20 s); older changes count as none (calibration: 2 % of the frames with nothing in view
 #: held a region over 0.5 % of the frame 20-40 s after the change, as without one).
 FAR_CHANGE_EDGES_S = (5.0, 20.0)
-#: The record columns the fits of other decisions read in place of the frame-level ones: a decision
-#: set's prefix (``citysim.fast.records.DECISION_PREFIXES``) before each.
+#: The decision sets fitted beside each frame's own decisions, each a ``SensorModel`` field; their
+#: record columns carry the set's name and '_' before the frame-level name (``citysim.fast.records``).
+DECISION_SETS = ("track", "plausible")
+#: The record columns each decision set's fit reads in place of the frame-level ones.
 DECISION_COLUMNS = ("hit", "det_class", "hit_ahead_m", "fa", "fa_distance_m", "fa_box", "fa_class")
 #: The fields ``SensorModel.track`` and ``SensorModel.plausible`` hold: those fitted again on their decisions.
 TRACK_FIELDS = ("p_hit", "persistence", "class_given_hit", "hit_ahead_m", "fa_start_p", "fa_length_frames", "fa_reports",
@@ -186,15 +189,15 @@ class SensorModel:
 
     def for_decisions(self, decisions: str) -> SensorModel:
         """The model of a controller counting the detector's ``decisions`` ('frame': each frame's
-        own; 'track': its track's; 'plausible': a frame's own while its track is plausible, from a
-        full k-of-n window of its life on): this one with that decision set's tables."""
+        own; 'track': its track's; 'plausible': a frame's own while its track is plausible, from its
+        n-th sighting on): this one with that decision set's tables."""
         if decisions == "frame":
             return self
-        tables = {"track": self.track, "plausible": self.plausible}.get(decisions)
+        tables = getattr(self, decisions) if decisions in DECISION_SETS else None
         if tables is None:
             raise ValueError(f"sensor model {self.key}: fitted without {decisions} decisions; recalibrate "
                              "(citysim calibrate)")
-        return SensorModel(**{**asdict(self), **tables, "track": None, "plausible": None})
+        return SensorModel(**{**asdict(self), **tables, **dict.fromkeys(DECISION_SETS)})
 
     def save(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -353,7 +356,7 @@ def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray],
                     rows["speed_mps"])  # fmt: skip
     decisions = _fit_decisions(cells, rows, frames, camera_hours)
     others = {}
-    for prefix in ("track", "plausible"):  # the same fit on another decision set's columns
+    for prefix in DECISION_SETS:  # the same fit on another decision set's columns
         if f"{prefix}_hit" in rows:
             named = {c: f"{prefix}_{c}" for c in DECISION_COLUMNS}
             set_rows = {**rows, **{c: rows[t] for c, t in named.items() if t in rows}}

@@ -28,6 +28,7 @@ from citysim.control.track_windows import (
 from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
     BEAM,
+    DECISION_SETS,
     KINDS,
     YOUNG_FRAMES,
     background_age_bin,
@@ -51,7 +52,7 @@ BEAM_HALF_WIDTH_M = 4.0
 #: ``detector_tracked``, ``detector_located``), and a frame's own while its track is plausible and
 #: its k-of-n window full ("plausible_": ``detector_confirmed`` per track). Fast mode draws each
 #: controller's hits from the fit of its own decisions (``SensorModel.for_decisions``).
-DECISION_PREFIXES = ("", "track_", "plausible_")
+DECISION_PREFIXES = ("", *(f"{name}_" for name in DECISION_SETS))
 ROW_COLUMNS = ("camera", "frame", "object_id", "kind", "forward_m", "bearing_rad", "speed_mps", "light", "young",
                *(f"{p}{c}" for p in DECISION_PREFIXES for c in ("hit", "det_class", "hit_ahead_m")))  # fmt: skip
 FRAME_COLUMNS = ("camera", "frame", "light", "has_candidates", "regions", "near_kind", "near_forward_m",

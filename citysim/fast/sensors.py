@@ -83,7 +83,7 @@ class FastSensors:
     """The sensor model applied to one night's agents: the factory camera controllers call."""
 
     #: detections are drawn from calibrated tables, which already hold what the real detector's
-    #: track windows wait for (``citysim.control.detecting.TrackWindows``)
+    #: track windows wait for (``citysim.control.track_windows``)
     drawn = True
 
     def __init__(self, model: SensorModel, street, rngs: list[np.random.Generator], fps: float):
