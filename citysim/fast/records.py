@@ -163,12 +163,8 @@ class CalibrationRecorder(Collector):
             row = {"camera": lamp_index, "frame": frame, "object_id": agent.object_id, "kind": KINDS.index(agent.cls),
                    "forward_m": cand.forward_m[a_i, lamp_index], "bearing_rad": cand.bearing_rad[a_i, lamp_index],
                    "speed_mps": agent.speed_mps, "light": light[a_i], "young": young}  # fmt: skip
-            for prefix, (hits, _, ahead) in decided.items():
-                det_class = hits.get(agent.object_id, -1)
-                row.update({f"{prefix}hit": det_class >= 0, f"{prefix}det_class": det_class,
-                            f"{prefix}hit_ahead_m": ahead.get(agent.object_id, 0.0) if det_class >= 0 else np.nan})
-            self._add_row(row)
-        self._beam_rows(lamp_index, frame, cand, young, {prefix: hits for prefix, (hits, _, _) in decided.items()})
+            self._add_row({**row, **_decision_values(decided, agent.object_id)})
+        self._beam_rows(lamp_index, frame, cand, young, decided)
         beams = np.flatnonzero(cand.beam_seen[:, lamp_index]) if len(self.agents) else idx
         near_kind, near_forward_m = nearest_in_view(np.array([KINDS.index(self.agents[j].cls) for j in idx.tolist()]),
                                                     cand.forward_m[idx, lamp_index],
@@ -249,9 +245,9 @@ class CalibrationRecorder(Collector):
                 return a
         return None
 
-    def _beam_rows(self, lamp_index: int, frame: int, cand, young: bool, hits: dict[str, dict]) -> None:
-        """One row per beam candidate of the camera (kind ``BEAM``, at its beam's middle); ``hits``
-        per decision set."""
+    def _beam_rows(self, lamp_index: int, frame: int, cand, young: bool, decided: dict[str, tuple]) -> None:
+        """One row per beam candidate of the camera (kind ``BEAM``, at its beam's middle); ``decided``
+        per decision set as ``on_frame`` has it (a beam's hit stands on its beam: 0 m ahead)."""
         if not len(self.agents):
             return
         for a_i in np.flatnonzero(cand.beam_seen[:, lamp_index]).tolist():
@@ -261,11 +257,7 @@ class CalibrationRecorder(Collector):
             row = {"camera": lamp_index, "frame": frame, "object_id": key, "kind": KINDS.index(BEAM),
                    "forward_m": cand.beam_forward_m[a_i, lamp_index], "bearing_rad": cand.beam_bearing_rad[a_i, lamp_index],
                    "speed_mps": agent.speed_mps, "light": light, "young": young}  # fmt: skip
-            for prefix, decided in hits.items():
-                det_class = decided.get(key, -1)
-                row.update({f"{prefix}hit": det_class >= 0, f"{prefix}det_class": det_class,
-                            f"{prefix}hit_ahead_m": 0.0 if det_class >= 0 else np.nan})
-            self._add_row(row)
+            self._add_row({**row, **_decision_values(decided, key)})
 
     def _add_row(self, row: dict) -> None:
         """One candidate row: a value for every column of ``ROW_COLUMNS``."""
@@ -296,6 +288,18 @@ class CalibrationRecorder(Collector):
         for c in (f"{p}fa_box" for p in DECISION_PREFIXES):
             frames[c] = frames[c].astype(np.float64).reshape(-1, 4)
         return rows, frames
+
+
+def _decision_values(decided: dict[str, tuple], key: int) -> dict:
+    """A candidate row's decision columns: per decision set (``DECISION_PREFIXES``), whether
+    candidate ``key`` was hit, the class it was hit as (-1: not) and how far ahead of it the hit
+    stood, m (0 unless recorded: its body, or a beam's own patch; NaN when not hit)."""
+    values = {}
+    for prefix, (hits, _, ahead) in decided.items():
+        det_class = hits.get(key, -1)
+        values.update({f"{prefix}hit": det_class >= 0, f"{prefix}det_class": det_class,
+                       f"{prefix}hit_ahead_m": ahead.get(key, 0.0) if det_class >= 0 else np.nan})
+    return values
 
 
 def _along_heading(agent: AgentState, ground_m) -> tuple[float, float]:
