@@ -180,8 +180,10 @@ def note_heading(track: Track, limits: PlausibilityLimits) -> None:
 
 def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
     """Why no road user could have made ``track`` (None: one could)."""
-    if track.box_jumps.count(True) >= limits.max_box_jumps and track.velocity_mps is None:
-        return "jumping"  # said as soon as seen: an insect's mark before its velocity is known
+    # said as soon as seen: an insect's mark before its velocity is known (the jumps are counted
+    # again below for a track whose velocity is known, so a young track's count is the only extra)
+    if track.velocity_mps is None and track.box_jumps.count(True) >= limits.max_box_jumps:
+        return "jumping"
     if track.sightings < limits.min_frames or track.velocity_mps is None:
         return "too few frames"
     speed = track.speed_mps
