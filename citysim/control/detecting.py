@@ -104,7 +104,8 @@ class DetectorConfirmed(DetectorPerFrame):
         self.n = ctx.spec.n or PAPER_N
         # per track, a track must be seen in n frames before it confirms (TrackWindows)
         full = self.window_must_fill and self.decides_per_track(ctx.spec) and windows_wait(ctx.sensors)
-        self.windows = [TrackWindows(self.k, self.n, full_window=full) for _ in ctx.camera_lamps]
+        self.windows = [TrackWindows(self.k, self.n, full_window=full, frame_period_s=ctx.frame_period_s)
+                        for _ in ctx.camera_lamps]  # fmt: skip
 
     def confirmed_tracks(self, camera_index, detections) -> set:
         """Record this frame's target decisions per track; the keys of the tracks now confirmed."""

@@ -166,7 +166,8 @@ class DetectorLocated(DetectorPerFrame):
         # the windows detector_confirmed keeps per track: a track is placed from its sixth sighting
         # by its frames' classes, not only once its pooled class and velocity call it a target
         full = windows_wait(ctx.sensors)
-        self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full)
+        self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full,
+                                     frame_period_s=ctx.frame_period_s)
                         for _ in ctx.camera_lamps]  # fmt: skip
         self.lanes = [(lane.y_center_m - lane.width_m / 2 - LANE_SLACK_M, lane.y_center_m + lane.width_m / 2
                        + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
