@@ -189,8 +189,9 @@ class DetectorNetwork(DetectorConfirmed):
         self.bank.trigger(lamp_index, t_s)
         det = self.detectors[camera_index]
         # the confirmed tracks' detections that are hits this frame (as their windows count them)
-        targets = [d for d in detections
-                   if d.track_id in confirmed and d.cls != "noise" and frame_hit(d, det.target_threshold)]
+        window = self.windows[camera_index]
+        targets = [d for d in detections if window.key_of(d.track_id) in confirmed and d.cls != "noise"
+                   and frame_hit(d, det.target_threshold)]  # fmt: skip
         if not targets or t_s - self.last_sent_s[camera_index] < self.repeat_s:
             if targets:
                 # keep tracking directions between notifications

@@ -221,7 +221,9 @@ class DetectorLocated(DetectorPerFrame):
         window = self.windows[camera_index]
         confirmed = window.update(keyed_marks(detections, det.target_threshold, window)[1])
         for d in detections:
-            if d.track_id is None or d.track_id not in confirmed or not frame_hit(d, det.target_threshold):
+            # a track succeeding a lost one (track_windows.successor_keys) is the same road user
+            key = window.key_of(d.track_id)
+            if d.track_id is None or key not in confirmed or not frame_hit(d, det.target_threshold):
                 continue
             cls = detection_class(d)  # a young track's pooled class says 'noise': its frame's then
             if cls == "noise":
@@ -234,8 +236,7 @@ class DetectorLocated(DetectorPerFrame):
                 if not np.all(np.isfinite(ground)):
                     continue
                 ground_x_m, ground_y_m = float(ground[0]), float(ground[1])
-            key = (camera_index, d.track_id)
-            track = self.tracks.setdefault(key, LocatedTrack(cls))
+            track = self.tracks.setdefault((camera_index, key), LocatedTrack(cls))
             # a track keeps the class carried furthest it was seen as: a car's class flips to cyclist,
             # group or pedestrian in glare, never the other way for long
             if EXTRAPOLATE_M.get(cls, 0.0) > EXTRAPOLATE_M.get(track.cls, 0.0):
