@@ -104,8 +104,7 @@ class DetectorConfirmed(DetectorPerFrame):
         self.n = ctx.spec.n or PAPER_N
         # per track, a track must be seen in n frames before it confirms (TrackWindows)
         full = self.window_must_fill and self.decides_per_track(ctx.spec) and windows_wait(ctx.sensors)
-        self.windows = [TrackWindows(self.k, self.n, full_window=full, frame_period_s=ctx.frame_period_s)
-                        for _ in ctx.camera_lamps]  # fmt: skip
+        self.windows = [TrackWindows(self.k, self.n, full_window=full) for _ in ctx.camera_lamps]
 
     def confirmed_tracks(self, camera_index, detections) -> set:
         """Record this frame's target decisions per track; the keys of the tracks now confirmed."""
@@ -189,9 +188,8 @@ class DetectorNetwork(DetectorConfirmed):
         self.bank.trigger(lamp_index, t_s)
         det = self.detectors[camera_index]
         # the confirmed tracks' detections that are hits this frame (as their windows count them)
-        window = self.windows[camera_index]
-        targets = [d for d in detections if window.key_of(d.track_id) in confirmed and d.cls != "noise"
-                   and frame_hit(d, det.target_threshold)]  # fmt: skip
+        targets = [d for d in detections
+                   if d.track_id in confirmed and d.cls != "noise" and frame_hit(d, det.target_threshold)]
         if not targets or t_s - self.last_sent_s[camera_index] < self.repeat_s:
             if targets:
                 # keep tracking directions between notifications

@@ -166,8 +166,7 @@ class DetectorLocated(DetectorPerFrame):
         # the windows detector_confirmed keeps per track: a track is placed from its sixth sighting
         # by its frames' classes, not only once its pooled class and velocity call it a target
         full = windows_wait(ctx.sensors)
-        self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full,
-                                     frame_period_s=ctx.frame_period_s)
+        self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full)
                         for _ in ctx.camera_lamps]  # fmt: skip
         self.lanes = [(lane.y_center_m - lane.width_m / 2 - LANE_SLACK_M, lane.y_center_m + lane.width_m / 2
                        + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
@@ -221,9 +220,7 @@ class DetectorLocated(DetectorPerFrame):
         window = self.windows[camera_index]
         confirmed = window.update(keyed_marks(detections, det.target_threshold, window)[1])
         for d in detections:
-            # a track succeeding a lost one (track_windows.successor_keys) is the same road user
-            key = window.key_of(d.track_id)
-            if d.track_id is None or key not in confirmed or not frame_hit(d, det.target_threshold):
+            if d.track_id is None or d.track_id not in confirmed or not frame_hit(d, det.target_threshold):
                 continue
             cls = detection_class(d)  # a young track's pooled class says 'noise': its frame's then
             if cls == "noise":
@@ -236,7 +233,8 @@ class DetectorLocated(DetectorPerFrame):
                 if not np.all(np.isfinite(ground)):
                     continue
                 ground_x_m, ground_y_m = float(ground[0]), float(ground[1])
-            track = self.tracks.setdefault((camera_index, key), LocatedTrack(cls))
+            key = (camera_index, d.track_id)
+            track = self.tracks.setdefault(key, LocatedTrack(cls))
             # a track keeps the class carried furthest it was seen as: a car's class flips to cyclist,
             # group or pedestrian in glare, never the other way for long
             if EXTRAPOLATE_M.get(cls, 0.0) > EXTRAPOLATE_M.get(track.cls, 0.0):

@@ -8,10 +8,8 @@ physics rule says no road user moves as the track does (``frame_hit``); a track 
 once it has been seen in n frames, by when an insect's track has shown itself 'jumping' or 'too
 fast' (from its second and fifth sighting); a young track standing on an established one is a
 fragment of it and counts for it (``fragment_keys``: a car passing close to the camera breaks
-into pieces that live a few frames each); a new track appearing where a plausible track was
-lost a moment ago continues it (``successor_keys``: a walker far from the camera is often seen
-as a string of tracks two or three frames long, none of which would ever be seen in n frames).
-Keys are track ids; None is the one window of detections without a track (the per-frame path).
+into pieces that live a few frames each). Keys are track ids; None is the one window of
+detections without a track (the per-frame path).
 """
 
 from __future__ import annotations
@@ -55,60 +53,29 @@ def plausible_marks(detections, threshold: float, keys: list | None = None) -> d
     return marks
 
 
-#: a new track is the successor of a plausible track lost at most this long ago (s) ...
-SUCCESSOR_GAP_S = 1.0
-#: ... whose last ground position is within this radius of the new track's first (m) plus what
-#: a brisk walker covers in the gap (m/s): a walker's bottom row jitters by about a metre at 20 m
-SUCCESSOR_RADIUS_M, SUCCESSOR_SPEED_MPS = 1.5, 2.5
-
-
 def keyed_marks(detections, threshold: float, window: TrackWindows) -> tuple[list, dict]:
-    """Each detection's window key (``fragment_keys``, then ``successor_keys``) and the frame's
-    marks by those keys (``plausible_marks``), before ``window.update``; the window remembers
-    where its plausible keys were seen."""
-    keys = successor_keys(detections, fragment_keys(detections, window), window)
-    marks = plausible_marks(detections, threshold, keys)
-    window.remember(detections, keys, marks)
-    return keys, marks
+    """Each detection's window key (``fragment_keys``) and the frame's marks by those keys
+    (``plausible_marks``), before ``window.update``."""
+    keys = fragment_keys(detections, window)
+    return keys, plausible_marks(detections, threshold, keys)
 
 
 def fragment_keys(detections, window: TrackWindows) -> list:
-    """Each detection's window key: its track's (its track id, or the track it succeeds, see
-    ``successor_keys``), or, for a track not yet seen enough (``window``) standing within
-    ``FRAGMENT_M`` of an established plausible track's detection on the ground, the nearest such
-    track's key (a fragment counts for the road user it belongs to)."""
-    keys = [window.key_of(d.track_id) for d in detections]
-    anchors = [(d.ground_x_m, d.ground_y_m, key) for d, key in zip(detections, keys, strict=True)
-               if key is not None and d.ground_x_m is not None and window.seen_enough(key)
+    """Each detection's window key: its track id, or, for a track not yet seen enough (``window``)
+    standing within ``FRAGMENT_M`` of an established plausible track's detection on the ground,
+    the nearest such track's id (a fragment counts for the road user it belongs to)."""
+    keys = [d.track_id for d in detections]
+    anchors = [(d.ground_x_m, d.ground_y_m, d.track_id) for d in detections
+               if d.track_id is not None and d.ground_x_m is not None and window.seen_enough(d.track_id)
                and d.track_reason not in NOT_A_ROAD_USER]  # fmt: skip
     if not anchors or not window.min_seen:
         return keys
     for i, d in enumerate(detections):
-        if keys[i] is None or d.ground_x_m is None or window.seen_enough(keys[i]):
+        if d.track_id is None or d.ground_x_m is None or window.seen_enough(d.track_id):
             continue
         dist_m, key = min((math.hypot(d.ground_x_m - x, d.ground_y_m - y), k) for x, y, k in anchors)
         if dist_m <= FRAGMENT_M:
             keys[i] = key
-    return keys
-
-
-def successor_keys(detections, keys: list, window: TrackWindows) -> list:
-    """``keys`` with each new track (first seen this frame, no key of a fragment, no physics rule
-    against it) that appears within reach of a plausible track lost in the last
-    ``SUCCESSOR_GAP_S`` given that track's key, for this frame and the rest of its life."""
-    if not window.min_seen or not window.lost_at:
-        return keys
-    present = set(keys)
-    for i, d in enumerate(detections):
-        if (keys[i] != d.track_id or d.track_id is None or d.ground_x_m is None or not window.is_new(d.track_id)
-                or d.track_reason in NOT_A_ROAD_USER):  # fmt: skip
-            continue
-        reach = [(math.hypot(d.ground_x_m - x, d.ground_y_m - y), key) for key, (x, y, frame) in window.lost_at.items()
-                 if key not in present and math.hypot(d.ground_x_m - x, d.ground_y_m - y)
-                 <= SUCCESSOR_RADIUS_M + SUCCESSOR_SPEED_MPS * (window.frames + 1 - frame) * window.frame_period_s]  # fmt: skip
-        if reach:
-            keys[i] = window.succeed(d.track_id, min(reach)[1])
-            present.add(keys[i])
     return keys
 
 
@@ -122,58 +89,15 @@ class TrackWindows:
     spoken (an insect at the emitter is 'jumping' or 'too fast' by its fifth sighting).
     """
 
-    def __init__(self, k: int, n: int, full_window: bool = False, frame_period_s: float = 1.0 / 15.0) -> None:
+    def __init__(self, k: int, n: int, full_window: bool = False) -> None:
         self.k, self.n, self.mask = k, n, (1 << n) - 1
         self.min_seen = n if full_window else 0
-        self.frame_period_s = frame_period_s
         self.bits: dict = {}
         self.seen: dict = {}  # key -> (frames it was seen in, frames since it was last seen)
-        self.frames = 0  # frames recorded so far
-        #: plausible keys -> (ground x m, ground y m, frame) where they were last seen (``successor_keys``)
-        self.lost_at: dict = {}
-        self.successors: dict = {}  # track id -> the key it continues
-        self._ids_seen: set = set()
-
-    def key_of(self, track_id):
-        """The window key of ``track_id``: the key of the track it succeeds, else its own id."""
-        return self.successors.get(track_id, track_id)
-
-    def is_new(self, track_id) -> bool:
-        """Whether ``track_id`` is seen for the first time this frame."""
-        return track_id not in self._ids_seen
-
-    def succeed(self, track_id, key):
-        """Make ``track_id`` the successor of ``key`` (it counts for ``key`` from now on)."""
-        self.successors[track_id] = key
-        return key
-
-    def remember(self, detections, keys: list, marks: dict) -> None:
-        """Where this frame's plausible keys stand on the ground (a key ruled out this frame is
-        forgotten: no successor takes its place); old places and successions are forgotten."""
-        if not self.min_seen:
-            return
-        frame = self.frames + 1  # the frame ``update`` is about to record
-        for d, key in zip(detections, keys, strict=True):
-            if d.track_id is not None:
-                self._ids_seen.add(d.track_id)
-            if key is None:
-                continue
-            if marks.get(key, False) is None:
-                self.lost_at.pop(key, None)
-            elif d.ground_x_m is not None:
-                self.lost_at[key] = (d.ground_x_m, d.ground_y_m, frame)
-        horizon = frame - SUCCESSOR_GAP_S / self.frame_period_s
-        if len(self.lost_at) > 64 or any(f < horizon for _, _, f in self.lost_at.values()):
-            self.lost_at = {key: v for key, v in self.lost_at.items() if v[2] >= horizon}
-        if len(self._ids_seen) > 4096:  # track ids only grow: keep the recent ones
-            recent = sorted(self._ids_seen)[-1024:]
-            self._ids_seen = set(recent)
-            self.successors = {t: key for t, key in self.successors.items() if t in self._ids_seen}
 
     def update(self, hits: dict) -> set:
         """Record one frame's ``{track key: target?}`` (None: ruled out this frame, no road user
         moves so: the track loses its hits); return the confirmed keys."""
-        self.frames += 1
         mask = self.mask
         bits = {key: b for key, b in ((key, (b << 1) & mask) for key, b in self.bits.items()) if b}
         for key, hit in hits.items():
@@ -187,10 +111,8 @@ class TrackWindows:
             return {key for key, b in bits.items() if b.bit_count() >= k}
         # a key is remembered while it holds hits or was seen in its last n frames
         n = self.n
-        # (or while a successor may still take its place: its sightings carry over)
         seen = {key: (count + (key in hits), 0 if key in hits else unseen + 1)
-                for key, (count, unseen) in self.seen.items()
-                if key in hits or key in bits or unseen + 1 < n or key in self.lost_at}  # fmt: skip
+                for key, (count, unseen) in self.seen.items() if key in hits or key in bits or unseen + 1 < n}  # fmt: skip
         for key in hits:
             seen.setdefault(key, (1, 0))
         self.seen = seen

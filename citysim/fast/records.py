@@ -133,8 +133,7 @@ class CalibrationRecorder(Collector):
         self.changes = LevelChanges(geometry)
         self._placed = None
         # each camera's tracks' sightings and windows, kept as detector_confirmed keeps them
-        self.windows = [TrackWindows(PAPER_K, PAPER_N, full_window=True, frame_period_s=1.0 / fps)
-                        for _ in range(geometry.n)]  # fmt: skip
+        self.windows = [TrackWindows(PAPER_K, PAPER_N, full_window=True) for _ in range(geometry.n)]
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
         self.agents = list(agents)

@@ -17,11 +17,9 @@ from citysim.control.track_windows import (
     FRAGMENT_M,
     PAPER_K,
     PAPER_N,
-    SUCCESSOR_RADIUS_M,
     TrackWindows,
     fragment_keys,
     frame_hit,
-    keyed_marks,
     plausible_marks,
 )
 from detector.detector import Detector
@@ -86,42 +84,6 @@ def test_a_young_fragment_on_an_established_track_counts_for_it():
     assert windows.update(marks) == {7}  # the car, by its pieces; the far one is not seen enough
 
 
-def walked_in_short_tracks(step_m: float, ids_per_track: int = 3, gap_frames: int = 1, rule=None):
-    """Frame by frame, the windows' confirmed keys for a walker the detector sees as a string of
-    tracks ``ids_per_track`` frames long with ``gap_frames`` unseen frames between them, each
-    track ``step_m`` further along the street than the last frame of the one before."""
-    windows = TrackWindows(PAPER_K, PAPER_N, full_window=True, frame_period_s=1.0 / 15.0)
-    x_m, confirmed = 10.0, []
-    for track_id in range(1, 6):
-        for frame in range(ids_per_track):
-            reason = rule if (rule and track_id == 1 and frame == ids_per_track - 1) else "too few frames"
-            confirmed.append(windows.update(keyed_marks([det(track_id, 0.9, reason, x_m=x_m)], 0.5, windows)[1]))
-            x_m += 0.1
-        for _ in range(gap_frames):
-            confirmed.append(windows.update({}))
-        x_m += step_m
-    return confirmed
-
-
-def test_a_walker_seen_as_short_tracks_confirms_as_one():
-    confirmed = walked_in_short_tracks(step_m=0.3)
-    # tracks 1-2 seen in 3 frames each with one frame between: the sixth sighting is frame 6
-    first = next(i for i, keys in enumerate(confirmed) if keys)
-    assert first == 6 and confirmed[first] == {1}  # counted in the first track's window
-
-
-def test_a_new_track_out_of_reach_starts_its_own_window():
-    # each track appears further from where the last was lost than a walker could have gone
-    assert not any(walked_in_short_tracks(step_m=SUCCESSOR_RADIUS_M + 1.0))
-
-
-def test_no_track_succeeds_one_a_physics_rule_ruled_out():
-    # the first track is 'jumping' in its last frame: the next one starts a window of its own
-    confirmed = walked_in_short_tracks(step_m=0.3, rule="jumping")
-    first = next(i for i, keys in enumerate(confirmed) if keys)
-    assert first > 6 and 1 not in confirmed[first]
-
-
 @pytest.fixture(scope="module")
 def model():
     return default_model()
@@ -134,7 +96,8 @@ def confirmations(detector: Detector, frames) -> tuple[int, int]:
     n_track = n_frame = 0
     for image in frames:
         detections = detector.process(image)
-        n_track += bool(per_track.update(keyed_marks(detections, 0.5, per_track)[1]))
+        keys = fragment_keys(detections, per_track)
+        n_track += bool(per_track.update(plausible_marks(detections, 0.5, keys)))
         n_frame += bool(per_frame.update({None: any(d.p_target >= 0.5 for d in detections)}))
     return n_track, n_frame
 
@@ -160,7 +123,7 @@ def test_a_walker_is_confirmed_by_the_seventh_frame(model):
     confirmed_at = None
     for k, image in enumerate(frames):
         detections = detector.process(image)
-        if per_track.update(keyed_marks(detections, 0.5, per_track)[1]):
+        if per_track.update(plausible_marks(detections, 0.5, fragment_keys(detections, per_track))):
             confirmed_at = k if confirmed_at is None else confirmed_at
     # seen in 6 frames at the earliest (index 5); one frame of slack for a frame segmented differently
     assert confirmed_at is not None and confirmed_at <= 6, confirmed_at

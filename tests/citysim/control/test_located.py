@@ -78,26 +78,6 @@ def test_a_young_track_whose_frames_are_targets_is_placed_from_its_sixth_sightin
     assert controller.ctx.lamps[2].target_level == 1.0  # x 90 m: lamp 2's zone (90-120 m), the camera's own
 
 
-def test_a_walker_seen_as_a_string_of_short_tracks_is_placed_as_one():
-    # the detector loses a far walker every few frames; each new track appears where the last was
-    # lost (track_windows.successor_keys): placed under the first track's key once seen in 6 frames
-    scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
-    night = build_night(scenario)
-    controller = build_controller(night, ControllerSpec(name="detector_located", light_blind_ends=False))
-    frame, x_m = 0, 90.0
-    for track_id in (5, 6, 7):
-        for _ in range(3):
-            walker = Detection((150, 150, 10, 30), np.zeros(6), "pedestrian", np.array([0.1, 0.8, 0.05, 0.03, 0.02]),
-                               0.9, track_id, track_cls="noise", track_p_target=0.3, track_target=False,
-                               track_reason="too few frames", ground_x_m=x_m, ground_y_m=4.3)  # fmt: skip
-            controller.place(2, frame / 15, [walker])
-            frame, x_m = frame + 1, x_m + 0.1
-        frame += 1  # a frame without it
-    assert list(controller.tracks) == [(2, 5)]  # from track 6's third frame, its sixth sighting
-    assert len(controller.tracks[(2, 5)].seen) == 4  # track 6's last frame and track 7's three
-    assert controller.ctx.lamps[2].target_level == 1.0
-
-
 def test_the_detectors_ground_velocity_is_used_when_the_track_has_one():
     scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
     night = build_night(scenario)
