@@ -35,6 +35,8 @@ import numpy as np
 from numba import njit
 
 _BINS = 256
+# histograms per tile counted interleaved (``_tile_luts``, whose loop is written out for four)
+_HISTOGRAM_COPIES = 4
 
 
 @njit(cache=True, nogil=True)
@@ -48,13 +50,26 @@ def _tile_luts(
     tiles_x = pairs.shape[1] - 1
     hist = np.empty(_BINS, np.int32)
     lut = np.empty(_BINS, np.float32)
+    # _HISTOGRAM_COPIES histograms, pixel x counted in copy x % _HISTOGRAM_COPIES, then summed:
+    # with one histogram, neighbouring pixels of one value (most of a dark frame) each wait for
+    # the previous increment's store before loading the count again
+    counts = np.empty((_HISTOGRAM_COPIES, _BINS), np.int32)
+    whole_px = tile_w - tile_w % _HISTOGRAM_COPIES  # of a tile row, counted four at a time
     for ty in range(tile_rows[0], tile_rows[1]):
         for tx in range(tile_cols[0], tile_cols[1]):
-            hist[:] = 0
+            counts[:] = 0
+            x0 = tx * tile_w
             for y in range(ty * tile_h, (ty + 1) * tile_h):
-                row = src[y]
-                for x in range(tx * tile_w, (tx + 1) * tile_w):
-                    hist[row[x]] += 1
+                row = src[y, x0 : x0 + tile_w]
+                for x in range(0, whole_px, _HISTOGRAM_COPIES):
+                    counts[0, row[x]] += 1
+                    counts[1, row[x + 1]] += 1
+                    counts[2, row[x + 2]] += 1
+                    counts[3, row[x + 3]] += 1
+                for x in range(whole_px, tile_w):
+                    counts[0, row[x]] += 1
+            for i in range(_BINS):
+                hist[i] = counts[0, i] + counts[1, i] + counts[2, i] + counts[3, i]
             clipped = 0
             for i in range(_BINS):
                 if hist[i] > clip_limit:
@@ -87,9 +102,10 @@ def _tile_luts(
 
 
 @njit(cache=True, nogil=True)
-def _column_weights(cols, tile_w, boundary, xa, xa1):  # pragma: no cover - compiled
-    """Per column of the half-open range ``cols``: the tile boundary it lies after (index into
-    the pairs) and OpenCV's float32 weights of the right and the left table."""
+def _column_weights(cols, tile_w, offset, xa, xa1):  # pragma: no cover - compiled
+    """Per column of the half-open range ``cols``: where the pair of tables it interpolates
+    between starts in a tile row of the pairs, flattened (the tile boundary it lies after
+    x 2 x 256), and OpenCV's float32 weights of the right and the left table."""
     one, half = np.float32(1.0), np.float32(0.5)
     inv_tw = one / np.float32(tile_w)
     for k in range(cols[1] - cols[0]):
@@ -97,16 +113,20 @@ def _column_weights(cols, tile_w, boundary, xa, xa1):  # pragma: no cover - comp
         tx1 = int(math.floor(txf))
         xa[k] = txf - np.float32(tx1)
         xa1[k] = one - xa[k]
-        boundary[k] = tx1 + 1
+        offset[k] = (tx1 + 1) * 2 * _BINS
 
 
 @njit(cache=True, nogil=True)
 def _interpolate(src, pairs, rows, cols, tile_h, columns, dst):  # pragma: no cover - compiled
     """``dst[y - rows[0], x - cols[0]]`` for the frame's pixels ``rows`` x ``cols`` (ranges):
     OpenCV's float32 interpolation between the tables ``pairs`` (``_tile_luts``); ``columns``:
-    ``_column_weights``' (boundary, xa, xa1)."""
-    boundary, xa, xa1 = columns
+    ``_column_weights``' (offset, xa, xa1)."""
+    offset, xa, xa1 = columns
     tiles_y = pairs.shape[0]
+    # each tile row's pairs as one flat array, read at unsigned indices: a signed index costs a
+    # test for negative (wrap-around) indices on every read
+    flat_pairs = pairs.reshape((tiles_y, -1))
+    two = np.uint64(2)
     # scalars, not array reads: the writes to dst could alias them, which keeps them in the loop
     row0, row1, col0, col1 = rows[0], rows[1], cols[0], cols[1]
     one, half = np.float32(1.0), np.float32(0.5)
@@ -116,15 +136,16 @@ def _interpolate(src, pairs, rows, cols, tile_h, columns, dst):  # pragma: no co
         ty1 = int(math.floor(tyf))
         ya = tyf - np.float32(ty1)
         ya1 = one - ya
-        upper = pairs[max(ty1, 0)]
-        lower = pairs[min(ty1 + 1, tiles_y - 1)]
+        upper = flat_pairs[max(ty1, 0)]
+        lower = flat_pairs[min(ty1 + 1, tiles_y - 1)]
         src_row = src[y, col0:col1]
         dst_row = dst[y - row0]
         for k in range(col1 - col0):
-            v = src_row[k]
-            a = upper[boundary[k], v]
-            b = lower[boundary[k], v]
-            res = (a[0] * xa1[k] + a[1] * xa[k]) * ya1 + (b[0] * xa1[k] + b[1] * xa[k]) * ya
+            left = offset[k] + two * src_row[k]
+            right = left + np.uint64(1)
+            res = (upper[left] * xa1[k] + upper[right] * xa[k]) * ya1 + (
+                lower[left] * xa1[k] + lower[right] * xa[k]
+            ) * ya
             # a convex combination of 0..255 values: within 0..255 after rounding
             dst_row[k] = np.uint8(np.int32(np.rint(res)))
 
@@ -186,7 +207,7 @@ class CropCLAHE:
         self._pairs = np.zeros((tiles, tiles + 1, _BINS, 2), np.float32)
         n_cols = cols[1] - cols[0]
         self._columns = (
-            np.empty(n_cols, np.int64),
+            np.empty(n_cols, np.uint64),
             np.empty(n_cols, np.float32),
             np.empty(n_cols, np.float32),
         )
