@@ -111,14 +111,28 @@ def _variation(values) -> float:
 def line_fit(points) -> tuple[float, float, float, float]:
     """Least-squares straight line through (t_s, forward_m, right_m) points: (forward velocity m/s,
     right velocity m/s, RMS residual m of the 2-D positions, mean forward_m)."""
+    # plain loops, not a sum() over a generator per figure (seven generators a call, the cost of the
+    # fit): each running sum adds the same terms in the same order from 0.0 as sum() did (CPython
+    # 3.11's sum() of floats adds them one by one in order), so the values are the same bit for bit
     n = len(points)
-    mt = sum(p[0] for p in points) / n
-    mf = sum(p[1] for p in points) / n
-    mr = sum(p[2] for p in points) / n
-    stt = sum((p[0] - mt) ** 2 for p in points)
-    vf = sum((p[0] - mt) * (p[1] - mf) for p in points) / stt
-    vr = sum((p[0] - mt) * (p[2] - mr) for p in points) / stt
-    sq = sum((p[1] - mf - vf * (p[0] - mt)) ** 2 + (p[2] - mr - vr * (p[0] - mt)) ** 2 for p in points)
+    sum_t_s = sum_forward_m = sum_right_m = 0.0
+    for t_s, forward_m, right_m in points:
+        sum_t_s += t_s
+        sum_forward_m += forward_m
+        sum_right_m += right_m
+    mt, mf, mr = sum_t_s / n, sum_forward_m / n, sum_right_m / n
+    # sums of squares and products of the deviations from the means: s^2, s m, s m
+    stt = sft = srt = 0.0
+    for t_s, forward_m, right_m in points:
+        dt_s = t_s - mt
+        stt += dt_s**2
+        sft += dt_s * (forward_m - mf)
+        srt += dt_s * (right_m - mr)
+    vf, vr = sft / stt, srt / stt
+    sq = 0.0
+    for t_s, forward_m, right_m in points:
+        dt_s = t_s - mt
+        sq += (forward_m - mf - vf * dt_s) ** 2 + (right_m - mr - vr * dt_s) ** 2
     return vf, vr, math.sqrt(sq / n), mf
 
 
