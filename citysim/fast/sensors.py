@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
 
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
+from citysim.fast.frame import SensedFrame
 from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
     BEAM,
@@ -38,45 +38,9 @@ from detector.segment import SegmenterParams
 
 #: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
 DRAWN_P_TARGET = 0.9
-#: Detector range, m: beyond it a candidate is not 'fully visible' truth for the confusion figures.
-DETECTOR_RANGE_M = 25.0
 _NO_INDICES = np.zeros(0, np.int64)
 #: A hit standing more than this ahead of its road user (m) is its light's patch, not its body.
 AHEAD_OF_BODY_M = 2.0
-
-
-@dataclass(frozen=True)
-class SensedTruth:
-    """A truth box as ``citysim.metrics.confusion`` reads it (attributes of a render TruthObject)."""
-
-    object_id: int
-    cls: str
-    x: int
-    y: int
-    w: int
-    h: int
-    fully_visible: bool
-
-
-class SensedFrame:
-    """What fast mode passes where a frame would be: the camera's shape and its candidates."""
-
-    def __init__(self, sensors: FastSensors, lamp_index: int):
-        cam = sensors.geometry.cameras[lamp_index]
-        self.shape = (cam.height_px, cam.width_px)
-        self.sensors = sensors
-        self.lamp_index = lamp_index
-        self._truth: tuple | None = None
-
-    @property
-    def truth(self) -> tuple:
-        if self._truth is None:
-            s, i = self.sensors, self.lamp_index
-            self._truth = tuple(
-                SensedTruth(a.object_id, a.cls, *s.box_px(i, j), bool(s.cand.forward_m[j, i] <= DETECTOR_RANGE_M))
-                for j, a in ((j, s.agents[j]) for j in s.candidates_of(i))
-            )  # fmt: skip
-        return self._truth
 
 
 class FastSensors:

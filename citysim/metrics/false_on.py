@@ -26,9 +26,15 @@ class FalseOnTime(Collector):
         self.seconds = 0.0
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
-        if levels.max(initial=0.0) <= self.dim_level + 1e-6:  # nothing lit: add() would add nothing
+        lit = levels > self.dim_level + 1e-6
+        lit_count = int(np.count_nonzero(lit))
+        if not lit_count:  # nothing lit: add() would add nothing
             return
-        self.add(self.dt_s, np.array([a.x_m for a in agents if a.is_target]), levels)
+        target_x_m = [a.x_m for a in agents if a.is_target]
+        if not target_x_m:  # no zone occupied: every lit lamp counts, as add() would count it
+            self.seconds += self.dt_s * float(lit_count)
+            return
+        self.add(self.dt_s, np.array(target_x_m), levels)
 
     def add(self, dt_s: float, target_x_m: np.ndarray, levels: np.ndarray) -> None:
         lit = levels > self.dim_level + 1e-6
