@@ -166,8 +166,12 @@ class LevelChanges:
         self.far_lamps = geometry.far_lamps
         self.changed_at_s = np.full(geometry.n, -np.inf)
         self.levels: np.ndarray | None = None
+        self._seen_levels: np.ndarray | None = None
 
     def update(self, t_s: float, levels: np.ndarray) -> None:
+        if levels is self._seen_levels:  # the same read-only array (``LampStates``): no level changed
+            return
+        self._seen_levels = None if levels.flags.writeable else levels
         if self.levels is not None:
             self.changed_at_s[levels != self.levels] = t_s
         self.levels = np.array(levels, dtype=np.float64)
