@@ -45,7 +45,7 @@ from __future__ import annotations
 import bisect
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -147,6 +147,17 @@ def threshold_conditions(kind: int, forward_m: float, lit: bool, age_bin: int,
     return (f"{far}/{own}/age{age_bin}", f"{far}/{own}") + keys
 
 
+def threshold_key(kind: int, forward_m: float, lit: bool, age_bin: int,
+                  far_change_age_s: float = math.inf) -> tuple:  # fmt: skip
+    """All ``threshold_conditions`` of the same arguments depend on, as a tuple: frames of equal
+    keys have the same conditions, so fast mode looks a key's samples up once."""
+    if kind >= 0:
+        return kind, scalar_bin_of(forward_m, DISTANCE_EDGES_M), lit, age_bin, None
+    far_bin = None if far_change_age_s >= FAR_CHANGE_EDGES_S[-1] else bisect.bisect_right(FAR_CHANGE_EDGES_S,
+                                                                                        far_change_age_s)  # fmt: skip
+    return kind, None, lit, age_bin, far_bin
+
+
 def nearest_in_view(kinds: np.ndarray, forward_m: np.ndarray, beam_forward_m: np.ndarray) -> tuple[int, float]:
     """The subject of a camera frame's threshold condition: its nearest candidate (``KINDS`` index,
     forward m); with no candidate the nearest beam of a road user out of view (a beam sweeping
@@ -197,7 +208,10 @@ class SensorModel:
         if tables is None:
             raise ValueError(f"sensor model {self.key}: fitted without {decisions} decisions; recalibrate "
                              "(citysim calibrate)")
-        return SensorModel(**{**asdict(self), **tables, **dict.fromkeys(DECISION_SETS)})
+        # the tables are shared, not copied (asdict's deep copy took ~0.3 CPU-s a controller): no
+        # model changes its tables after loading
+        own = {f.name: getattr(self, f.name) for f in fields(self)}
+        return SensorModel(**{**own, **tables, **dict.fromkeys(DECISION_SETS)})
 
     def save(self, path: Path) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -31,6 +31,7 @@ from citysim.fast.model import (
     cell_of,
     nearest_in_view,
     threshold_conditions,
+    threshold_key,
 )
 from citysim.fast.records import is_young
 from detector.detector import Detection
@@ -39,6 +40,7 @@ from detector.segment import SegmenterParams
 #: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
 DRAWN_P_TARGET = 0.9
 _NO_INDICES = np.zeros(0, np.int64)
+_NO_LIGHT = np.zeros(0, np.float64)
 #: A hit standing more than this ahead of its road user (m) is its light's patch, not its body.
 AHEAD_OF_BODY_M = 2.0
 
@@ -59,6 +61,7 @@ class FastSensors:
         self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
         self.class_cdf = {k: np.cumsum(v) for k, v in model.class_given_hit.items()}
         self.area_samples = {k: np.sort(np.asarray(v, dtype=np.float64)) for k, v in model.area_fraction.items()}
+        self._samples_by_key: dict[tuple, np.ndarray | None] = {}
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
         self.frame_k = -1
         self.agents: list = []
@@ -84,16 +87,20 @@ class FastSensors:
         """The agents and lamp levels of frame ``frame_k`` (before any camera of it is judged)."""
         self.frame_k = frame_k
         if agents is not self.agents:
+            # an empty street has no candidates, whichever empty list the step gave
+            self.cand = self.geometry.candidates(agents) if agents or self.agents else self.cand
             self.agents = agents
-            self.cand = self.geometry.candidates(agents)
             self._boxes = {}
             self._of_camera = [None] * self.geometry.n
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
         if self.changes is not None:
             self.changes.update(frame_k / self.fps, levels)
-        xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
-        self.light = self.geometry.light_at(xs, levels) if len(agents) else xs
+        if agents:
+            xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
+            self.light = self.geometry.light_at(xs, levels)
+        else:
+            self.light = _NO_LIGHT
         self._lit_cells = None
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
@@ -139,6 +146,15 @@ class FastSensors:
             for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
                 self._boxes[(lamp_index, j)] = box
         return self._boxes[key]
+
+    def area_samples_of(self, kind: int, forward_m: float, lit: bool, age_bin: int, far_s: float) -> np.ndarray | None:
+        """The area samples of the first of a frame's ``threshold_conditions`` calibration saw (None:
+        none), looked up once per ``threshold_key``."""
+        key = threshold_key(kind, forward_m, lit, age_bin, far_s)
+        if key not in self._samples_by_key:
+            conditions = threshold_conditions(kind, forward_m, lit, age_bin, far_s)
+            self._samples_by_key[key] = next((self.area_samples[c] for c in conditions if c in self.area_samples), None)
+        return self._samples_by_key[key]
 
     def lit(self, lamp_index: int) -> int:
         return int(self.levels[lamp_index] >= LIT_LEVEL)
@@ -327,12 +343,14 @@ class SensedSegmenter(_LearningRate):
 
     def apply(self, frame: SensedFrame, learning_rate: float | None = None) -> _Areas:
         s, i = self.sensors, self.lamp_index
-        idx = s.candidates_of(i)
-        kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
-                                          s.cand.forward_m[idx, i], s.cand.beam_forward_m[s.beams_of(i), i])
+        if s.agents:
+            idx = s.candidates_of(i)
+            kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
+                                              s.cand.forward_m[idx, i], s.cand.beam_forward_m[s.beams_of(i), i])
+        else:  # an empty street: what nearest_in_view says of no candidate and no beam
+            kind, forward_m = -1, math.nan
         far_s = s.changes.far_change_age_s(i, s.frame_k / s.fps) if kind < 0 else math.inf
-        conditions = threshold_conditions(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate), far_s)
-        samples = next((s.area_samples[c] for c in conditions if c in s.area_samples), None)
+        samples = s.area_samples_of(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate), far_s)
         # the frame's rank among its condition's (sorted) samples: kept from the last judged frame
         # with the model's persistence, so a big region lasts an episode as in the real frames
         if not (s.frame_k == self.last_frame_k + 1 and self.rng.random() < s.model.area_persistence):

@@ -24,10 +24,15 @@ class FalseOnTime(Collector):
         self.dim_level = dim_level
         self.dt_s = dt_s
         self.seconds = 0.0
+        self._levels_counted: np.ndarray | None = None
+        self._lit_count = 0
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
-        lit = levels > self.dim_level + 1e-6
-        lit_count = int(np.count_nonzero(lit))
+        if levels is not self._levels_counted:
+            self._lit_count = int(np.count_nonzero(levels > self.dim_level + 1e-6))
+            # a read-only array is ``LampStates``' shared one: its count holds while it is passed again
+            self._levels_counted = None if levels.flags.writeable else levels
+        lit_count = self._lit_count
         if not lit_count:  # nothing lit: add() would add nothing
             return
         target_x_m = [a.x_m for a in agents if a.is_target]
