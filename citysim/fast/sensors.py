@@ -73,6 +73,7 @@ class FastSensors:
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
         self._of_camera: list[np.ndarray | None] = [None] * self.geometry.n
+        self._beams_of_camera: list[np.ndarray | None] = [None] * self.geometry.n
         self._cells: tuple | None = None
         self._lit_cells: np.ndarray | None = None
 
@@ -92,6 +93,7 @@ class FastSensors:
             self.agents = agents
             self._boxes = {}
             self._of_camera = [None] * self.geometry.n
+            self._beams_of_camera = [None] * self.geometry.n
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
         if self.changes is not None:
@@ -115,7 +117,10 @@ class FastSensors:
         """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
         if not self.agents:
             return _NO_INDICES
-        return np.flatnonzero(self.cand.beam_seen[:, lamp_index])
+        idx = self._beams_of_camera[lamp_index]
+        if idx is None:  # asked by the detector and the segmenter of each judged frame: found once
+            idx = self._beams_of_camera[lamp_index] = np.flatnonzero(self.cand.beam_seen[:, lamp_index])
+        return idx
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
         """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
