@@ -74,6 +74,8 @@ class FastSensors:
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
         self._of_camera: list[np.ndarray | None] = [None] * self.geometry.n
         self._beams_of_camera: list[np.ndarray | None] = [None] * self.geometry.n
+        self._cameras_seeing: list[bool] | None = None
+        self._cameras_seeing_beams: list[bool] | None = None
         self._cells: tuple | None = None
         self._lit_cells: np.ndarray | None = None
 
@@ -94,6 +96,7 @@ class FastSensors:
             self._boxes = {}
             self._of_camera = [None] * self.geometry.n
             self._beams_of_camera = [None] * self.geometry.n
+            self._cameras_seeing = self._cameras_seeing_beams = None
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
         if self.changes is not None:
@@ -110,7 +113,10 @@ class FastSensors:
             return _NO_INDICES
         idx = self._of_camera[lamp_index]
         if idx is None:
-            idx = self._of_camera[lamp_index] = np.flatnonzero(self.cand.seen[:, lamp_index])
+            if self._cameras_seeing is None:  # most cameras see nobody: told apart in one pass
+                self._cameras_seeing = self.cand.seen.any(axis=0).tolist()
+            idx = np.flatnonzero(self.cand.seen[:, lamp_index]) if self._cameras_seeing[lamp_index] else _NO_INDICES
+            self._of_camera[lamp_index] = idx
         return idx
 
     def beams_of(self, lamp_index: int) -> np.ndarray:
@@ -119,7 +125,11 @@ class FastSensors:
             return _NO_INDICES
         idx = self._beams_of_camera[lamp_index]
         if idx is None:  # asked by the detector and the segmenter of each judged frame: found once
-            idx = self._beams_of_camera[lamp_index] = np.flatnonzero(self.cand.beam_seen[:, lamp_index])
+            if self._cameras_seeing_beams is None:
+                self._cameras_seeing_beams = self.cand.beam_seen.any(axis=0).tolist()
+            idx = np.flatnonzero(self.cand.beam_seen[:, lamp_index]) if self._cameras_seeing_beams[lamp_index] \
+                else _NO_INDICES  # fmt: skip
+            self._beams_of_camera[lamp_index] = idx
         return idx
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
@@ -348,11 +358,11 @@ class SensedSegmenter(_LearningRate):
 
     def apply(self, frame: SensedFrame, learning_rate: float | None = None) -> _Areas:
         s, i = self.sensors, self.lamp_index
-        if s.agents:
-            idx = s.candidates_of(i)
+        idx, beams = s.candidates_of(i), s.beams_of(i)
+        if len(idx) or len(beams):
             kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
-                                              s.cand.forward_m[idx, i], s.cand.beam_forward_m[s.beams_of(i), i])
-        else:  # an empty street: what nearest_in_view says of no candidate and no beam
+                                              s.cand.forward_m[idx, i], s.cand.beam_forward_m[beams, i])
+        else:  # nothing in view: what nearest_in_view says of no candidate and no beam
             kind, forward_m = -1, math.nan
         far_s = s.changes.far_change_age_s(i, s.frame_k / s.fps) if kind < 0 else math.inf
         samples = s.area_samples_of(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate), far_s)

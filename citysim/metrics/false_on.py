@@ -38,8 +38,11 @@ class FalseOnTime(Collector):
         if not self._lit_lamps:  # nothing lit: nothing to add
             return
         target_x_m = [a.x_m for a in agents if a.is_target]
-        starts, ends = self._starts_m, self._ends_m
-        unoccupied = sum(1 for j in self._lit_lamps if not any(starts[j] <= x < ends[j] for x in target_x_m))
+        if target_x_m:
+            starts, ends = self._starts_m, self._ends_m
+            unoccupied = sum(1 for j in self._lit_lamps if not any(starts[j] <= x < ends[j] for x in target_x_m))
+        else:  # no zone occupied: every lit lamp counts
+            unoccupied = len(self._lit_lamps)
         self.seconds += self.dt_s * float(unoccupied)
 
     def add(self, dt_s: float, target_x_m: np.ndarray, levels: np.ndarray) -> None:
