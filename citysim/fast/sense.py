@@ -37,8 +37,9 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
             continue
         ramping = lamp_states.ramping(t)
         sensors.observe(k, agents, lamp_states.levels_at(t))
+        awake = sensors.awake_cameras()
         for i in range(n):
-            if not (every or sensors.cand.awake[i] or controller.motion_seen(i)
+            if not (every or awake[i] or controller.motion_seen(i)
                     or (any_ramping and any(ramping[j] for j in watch[i]))):  # fmt: skip
                 continue
             frame = SensedFrame(sensors, i)

@@ -75,6 +75,7 @@ class FastSensors:
         self._of_camera: list[np.ndarray | None] = [None] * self.geometry.n
         self._beams_of_camera: list[np.ndarray | None] = [None] * self.geometry.n
         self._cameras_seeing: list[bool] | None = None
+        self._awake: list[bool] | None = None
         self._cameras_seeing_beams: list[bool] | None = None
         self._cells: tuple | None = None
         self._lit_cells: np.ndarray | None = None
@@ -97,6 +98,7 @@ class FastSensors:
             self._of_camera = [None] * self.geometry.n
             self._beams_of_camera = [None] * self.geometry.n
             self._cameras_seeing = self._cameras_seeing_beams = None
+            self._awake = None
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
         if self.changes is not None:
@@ -107,6 +109,12 @@ class FastSensors:
         else:
             self.light = _NO_LIGHT
         self._lit_cells = None
+
+    def awake_cameras(self) -> list[bool]:
+        """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
+        if self._awake is None:
+            self._awake = self.cand.awake.tolist()
+        return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
         if not self.agents:

@@ -5,12 +5,15 @@ ZoneTracker fed shared read-only levels against fresh copies of them."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from citysim.metrics.false_on import FalseOnTime
 from citysim.metrics.zones import ZoneTracker
 from tests.citysim.metrics.test_metrics import DT_S, _agent, _street
 
 ZONES_M = [(0.0, 10.0), (10.0, 20.0), (20.0, 30.0), (30.0, 40.0)]
+#: zones out of street order, one inside another, one empty: the per-step path's general case
+OVERLAPPING_ZONES_M = [(10.0, 20.0), (0.0, 15.0), (20.0, 20.0), (18.0, 40.0)]
 DIM_LEVEL = 0.2
 
 
@@ -30,8 +33,9 @@ def _steps(seed: int, n_steps: int = 600):
     return steps
 
 
-def test_false_on_time_per_step_is_add_bit_for_bit():
-    street = _street(ZONES_M)
+@pytest.mark.parametrize("zones_m", [ZONES_M, OVERLAPPING_ZONES_M])
+def test_false_on_time_per_step_is_add_bit_for_bit(zones_m):
+    street = _street(zones_m)
     for seed in range(5):
         fast, long = FalseOnTime(street, DIM_LEVEL, DT_S), FalseOnTime(street, DIM_LEVEL, DT_S)
         shared = None
