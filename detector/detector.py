@@ -36,27 +36,38 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import sklearn
 
 from detector.camera import CameraModel
-from detector.classifier import DimensionalClassifier
 from detector.confirm import Tracker
 from detector.divide import DivisionParams, divide_rows
-from detector.fast_proba import camera_rows_proba, compiled_rows_proba, numpy_predict_proba
 from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
-from detector.general_model import default_model
 from detector.roi import Crop, full_frame, range_crop
 from detector.segment import Regions, Segmenter, SegmenterParams
 from detector.split_compiled import load as load_compiled_splits
 from detector.tracks.tracker import TrackSet
 
-__all__ = ["Detection", "Detector", "numpy_predict_proba"]
+if TYPE_CHECKING:
+    from detector.classifier import DimensionalClassifier
+
+# numpy_predict_proba is served by the module __getattr__ below (it imports scikit-learn)
+__all__ = ["Detection", "Detector", "numpy_predict_proba"]  # noqa: F822
 
 # frozen, so one shared default instance is safe
 _DEFAULT_SEGMENTER_PARAMS = SegmenterParams()
 _DEFAULT_DIVISION_PARAMS = DivisionParams()
+
+
+def __getattr__(name: str):
+    # numpy_predict_proba is re-exported lazily: its module imports scikit-learn (about 2 CPU-s),
+    # which a process that only needs ``Detection`` (citysim's fast mode) should not pay
+    if name == "numpy_predict_proba":
+        from detector.fast_proba import numpy_predict_proba
+
+        return numpy_predict_proba
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -149,6 +160,10 @@ class Detector:
             raise ValueError(
                 f"Detector target_threshold must be in [0, 1], got {target_threshold!r}"
             )
+        # the classifier's modules import scikit-learn: loaded by the first Detector, not on import
+        from detector.fast_proba import camera_rows_proba, compiled_rows_proba, numpy_predict_proba
+        from detector.general_model import default_model
+
         self.camera = camera
         self.model = default_model() if model is None else model
         classes = np.asarray(getattr(self.model, "classes_", ()))
@@ -219,6 +234,8 @@ class Detector:
         return []
 
     def _sklearn_predict_proba(self, feats: np.ndarray) -> np.ndarray:
+        import sklearn  # loaded already: the model is scikit-learn's
+
         # the rows are finite by construction (valid), so skip scikit-learn's re-check
         with sklearn.config_context(assume_finite=True):
             return self.model.predict_proba(feats)

@@ -19,7 +19,7 @@ import numpy as np
 
 from citysim.config.scenario import ControllerSpec
 from citysim.config.street import LuminaireSpec
-from citysim.control.lamps import Lamp
+from citysim.control.lamps import Lamp, LampStates
 from citysim.control.network import Network
 from citysim.world.agents import AgentState
 from citysim.world.street import Street
@@ -41,6 +41,13 @@ class ControlContext:
     #: ones on rendered frames; in fast mode a sensor model (``citysim.fast.sensors.FastSensors``:
     #: ``detectors(ctx, threshold)`` and ``segmenters(ctx)``) with the same interface.
     sensors: object | None = None
+    #: The lamps' levels and ramping, read once per step by everything that needs them (made from
+    #: ``lamps`` when not given)
+    lamp_states: LampStates | None = None
+
+    def __post_init__(self) -> None:
+        if self.lamp_states is None:
+            self.lamp_states = LampStates(self.lamps)
 
     @property
     def camera_lamps(self) -> tuple[int, ...]:

@@ -103,7 +103,8 @@ class LightChangeWatch:
 
     def check(self, camera_index: int, t_s: float) -> str:
         """'changing' (skip this frame), 'settled' (rebuild the background, then judge) or 'steady'."""
-        changing = any(self.ctx.lamps[j].is_ramping(t_s) for j in self.watched[camera_index])
+        ramping = self.ctx.lamp_states.ramping(t_s)
+        changing = any(ramping[j] for j in self.watched[camera_index])
         was = self.was_changing[camera_index]
         self.was_changing[camera_index] = changing
         if changing:

@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from numbers import Real
+from typing import ClassVar
 
 import numpy as np
 
@@ -106,6 +107,10 @@ class Lamp:
     memory and per-call work are O(1) however long the run.
     """
 
+    #: Target changes of every lamp of the process so far: a ``LampStates`` whose count is unchanged
+    #: knows no lamp has started a ramp since it last looked.
+    target_changes: ClassVar[int] = 0
+
     def __init__(
         self,
         index: int,
@@ -145,6 +150,11 @@ class Lamp:
         """The level the lamp is heading to (0..1), set by the last ``set_target``."""
         return self._target
 
+    def is_settled(self, t_s: float) -> bool:
+        """True when ``level_at(t_s)`` is the target exactly (the test it makes), and so at any later time
+        until the target changes."""
+        return t_s - self._anchor_t_s >= self._reach_s
+
     def is_ramping(self, t_s: float) -> bool:
         """True while the level at ``t_s`` is still moving toward the target."""
         return t_s < self._anchor_t_s + self._reach_s
@@ -168,6 +178,7 @@ class Lamp:
         self._anchor_t_s = float(t_s)
         self._anchor_level = now_level
         self._target = float(level)
+        Lamp.target_changes += 1
         self._reach_s = abs(self._target - now_level) * (self.spec.ramp_up_s if self._target >= now_level
                                                           else self.spec.fade_s)  # fmt: skip
 
@@ -250,3 +261,55 @@ class Lamp:
 def levels_at(lamps: Sequence[Lamp], t_s: float) -> np.ndarray:
     """Every lamp's visible-light level (0..1) at ``t_s``, in lamp order."""
     return np.array([lamp.level_at(t_s) for lamp in lamps])
+
+
+class LampStates:
+    """Every lamp's level and ramping, shared by the consumers of one run (the loop's collectors,
+    the cameras, the controllers' light watches) instead of asked of each lamp by each of them.
+
+    A level moves only during a ramp, and a ramp starts only when a target changes
+    (``Lamp.target_changes``), so the levels read once every lamp has settled hold, bit for bit,
+    until the next change: most physics steps of a night reuse them. The array returned is shared
+    and read-only.
+    """
+
+    def __init__(self, lamps: Sequence[Lamp]):
+        self.lamps = list(lamps)
+        self._levels = np.zeros(0)
+        self._levels_t_s = math.nan
+        self._levels_changes = -1
+        self._levels_settled = False
+        self._reached_changes = -1
+        self._reached_at_s: list[float] = []
+        self._last_reached_s = math.inf
+        self._none_ramping = (False,) * len(self.lamps)
+
+    def levels_at(self, t_s: float) -> np.ndarray:
+        """``levels_at(lamps, t_s)``, computed again only when a target changed or a lamp was ramping."""
+        if self._levels_changes == Lamp.target_changes and (
+            t_s == self._levels_t_s or (self._levels_settled and t_s >= self._levels_t_s)
+        ):
+            return self._levels
+        levels = levels_at(self.lamps, t_s)
+        levels.flags.writeable = False  # shared by every consumer of this step
+        self._levels, self._levels_t_s, self._levels_changes = levels, t_s, Lamp.target_changes
+        self._levels_settled = all(lamp.is_settled(t_s) for lamp in self.lamps)
+        return levels
+
+    def _update_reached(self) -> None:
+        if self._reached_changes != Lamp.target_changes:
+            self._reached_at_s = [lamp.reached_at_s() for lamp in self.lamps]
+            self._last_reached_s = max(self._reached_at_s, default=-math.inf)
+            self._reached_changes = Lamp.target_changes
+
+    def any_ramping(self, t_s: float) -> bool:
+        """Whether any lamp ``is_ramping(t_s)``."""
+        self._update_reached()
+        return t_s < self._last_reached_s
+
+    def ramping(self, t_s: float) -> Sequence[bool]:
+        """``is_ramping(t_s)`` of every lamp, in lamp order."""
+        self._update_reached()
+        if t_s >= self._last_reached_s:
+            return self._none_ramping
+        return [t_s < reached_s for reached_s in self._reached_at_s]

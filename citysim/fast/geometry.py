@@ -166,13 +166,24 @@ class LevelChanges:
         self.far_lamps = geometry.far_lamps
         self.changed_at_s = np.full(geometry.n, -np.inf)
         self.levels: np.ndarray | None = None
+        self._seen_levels: np.ndarray | None = None
+        #: per camera, when a lamp in its far view last changed (None: no far lamps); None: not known yet
+        self._last_far_change_s: list | None = None
 
     def update(self, t_s: float, levels: np.ndarray) -> None:
+        if levels is self._seen_levels:  # the same read-only array (``LampStates``): no level changed
+            return
+        self._seen_levels = None if levels.flags.writeable else levels
         if self.levels is not None:
-            self.changed_at_s[levels != self.levels] = t_s
+            changed = levels != self.levels
+            if changed.any():
+                self.changed_at_s[changed] = t_s
+                self._last_far_change_s = None
         self.levels = np.array(levels, dtype=np.float64)
 
     def far_change_age_s(self, camera: int, t_s: float) -> float:
         """Seconds since a lamp in camera ``camera``'s far view last changed level (inf: never seen to)."""
-        far = self.far_lamps[camera]
-        return float(t_s - self.changed_at_s[far].max()) if len(far) else math.inf
+        if self._last_far_change_s is None:  # per camera, once per change: asked by every idle judged frame
+            self._last_far_change_s = [self.changed_at_s[far].max() if len(far) else None for far in self.far_lamps]
+        last_s = self._last_far_change_s[camera]
+        return float(t_s - last_s) if last_s is not None else math.inf

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from citysim.control.lamps import Lamp, levels_at
+from citysim.control.lamps import Lamp
 from citysim.fast.sensors import FastSensors, SensedFrame
 from citysim.metrics.collector import Collector
 
@@ -22,6 +22,7 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
     env = night.env
     fps = night.street.lamps[0].camera.fps
     stride = night.scenario.simulation.idle_frame_stride
+    lamp_states = controller.ctx.lamp_states
     n = len(lamps)
     watch = [list(range(max(0, i - 1), min(n, i + 2))) for i in range(n)]
     k = 0
@@ -30,20 +31,23 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
         t = env.now
         agents = night.agents
         every = stride <= 1 or k % stride == 0
-        ramping = [lamp.is_ramping(t) for lamp in lamps]
-        if not every and not agents and not _any_motion(controller, n) and not any(ramping):
+        any_ramping = lamp_states.any_ramping(t)
+        if not every and not agents and not _any_motion(controller, n) and not any_ramping:
             k += 1  # a still street with nothing moving in view: no camera is judged
             continue
-        levels = levels_at(lamps, t)
-        sensors.observe(k, agents, levels)
+        ramping = lamp_states.ramping(t)
+        sensors.observe(k, agents, lamp_states.levels_at(t))
+        awake = sensors.awake_cameras()
         for i in range(n):
-            if not (every or sensors.cand.awake[i] or controller.motion_seen(i)
-                    or any(ramping[j] for j in watch[i])):  # fmt: skip
+            if not (every or awake[i] or controller.motion_seen(i)
+                    or (any_ramping and any(ramping[j] for j in watch[i]))):  # fmt: skip
                 continue
             frame = SensedFrame(sensors, i)
             detections = controller.on_frame(i, t, frame)
-            for collector in collectors:
-                collector.on_frame(i, t, frame.truth if detections is not None else (), detections)
+            if collectors:
+                truth = frame.truth if detections is not None else ()
+                for collector in collectors:
+                    collector.on_frame(i, t, truth, detections)
         k += 1
 
 

@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
 
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
+from citysim.fast.frame import SensedFrame
 from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
     BEAM,
@@ -31,6 +31,7 @@ from citysim.fast.model import (
     cell_of,
     nearest_in_view,
     threshold_conditions,
+    threshold_key,
 )
 from citysim.fast.records import is_young
 from detector.detector import Detection
@@ -38,45 +39,10 @@ from detector.segment import SegmenterParams
 
 #: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
 DRAWN_P_TARGET = 0.9
-#: Detector range, m: beyond it a candidate is not 'fully visible' truth for the confusion figures.
-DETECTOR_RANGE_M = 25.0
 _NO_INDICES = np.zeros(0, np.int64)
+_NO_LIGHT = np.zeros(0, np.float64)
 #: A hit standing more than this ahead of its road user (m) is its light's patch, not its body.
 AHEAD_OF_BODY_M = 2.0
-
-
-@dataclass(frozen=True)
-class SensedTruth:
-    """A truth box as ``citysim.metrics.confusion`` reads it (attributes of a render TruthObject)."""
-
-    object_id: int
-    cls: str
-    x: int
-    y: int
-    w: int
-    h: int
-    fully_visible: bool
-
-
-class SensedFrame:
-    """What fast mode passes where a frame would be: the camera's shape and its candidates."""
-
-    def __init__(self, sensors: FastSensors, lamp_index: int):
-        cam = sensors.geometry.cameras[lamp_index]
-        self.shape = (cam.height_px, cam.width_px)
-        self.sensors = sensors
-        self.lamp_index = lamp_index
-        self._truth: tuple | None = None
-
-    @property
-    def truth(self) -> tuple:
-        if self._truth is None:
-            s, i = self.sensors, self.lamp_index
-            self._truth = tuple(
-                SensedTruth(a.object_id, a.cls, *s.box_px(i, j), bool(s.cand.forward_m[j, i] <= DETECTOR_RANGE_M))
-                for j, a in ((j, s.agents[j]) for j in s.candidates_of(i))
-            )  # fmt: skip
-        return self._truth
 
 
 class FastSensors:
@@ -95,6 +61,7 @@ class FastSensors:
         self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
         self.class_cdf = {k: np.cumsum(v) for k, v in model.class_given_hit.items()}
         self.area_samples = {k: np.sort(np.asarray(v, dtype=np.float64)) for k, v in model.area_fraction.items()}
+        self._samples_by_key: dict[tuple, np.ndarray | None] = {}
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
         self.frame_k = -1
         self.agents: list = []
@@ -106,6 +73,10 @@ class FastSensors:
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
         self._of_camera: list[np.ndarray | None] = [None] * self.geometry.n
+        self._beams_of_camera: list[np.ndarray | None] = [None] * self.geometry.n
+        self._cameras_seeing: list[bool] | None = None
+        self._awake: list[bool] | None = None
+        self._cameras_seeing_beams: list[bool] | None = None
         self._cells: tuple | None = None
         self._lit_cells: np.ndarray | None = None
 
@@ -120,31 +91,54 @@ class FastSensors:
         """The agents and lamp levels of frame ``frame_k`` (before any camera of it is judged)."""
         self.frame_k = frame_k
         if agents is not self.agents:
+            # an empty street has no candidates, whichever empty list the step gave
+            self.cand = self.geometry.candidates(agents) if agents or self.agents else self.cand
             self.agents = agents
-            self.cand = self.geometry.candidates(agents)
             self._boxes = {}
             self._of_camera = [None] * self.geometry.n
+            self._beams_of_camera = [None] * self.geometry.n
+            self._cameras_seeing = self._cameras_seeing_beams = None
+            self._awake = None
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
         if self.changes is not None:
             self.changes.update(frame_k / self.fps, levels)
-        xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
-        self.light = self.geometry.light_at(xs, levels) if len(agents) else xs
+        if agents:
+            xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
+            self.light = self.geometry.light_at(xs, levels)
+        else:
+            self.light = _NO_LIGHT
         self._lit_cells = None
+
+    def awake_cameras(self) -> list[bool]:
+        """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
+        if self._awake is None:
+            self._awake = self.cand.awake.tolist()
+        return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
         if not self.agents:
             return _NO_INDICES
         idx = self._of_camera[lamp_index]
         if idx is None:
-            idx = self._of_camera[lamp_index] = np.flatnonzero(self.cand.seen[:, lamp_index])
+            if self._cameras_seeing is None:  # most cameras see nobody: told apart in one pass
+                self._cameras_seeing = self.cand.seen.any(axis=0).tolist()
+            idx = np.flatnonzero(self.cand.seen[:, lamp_index]) if self._cameras_seeing[lamp_index] else _NO_INDICES
+            self._of_camera[lamp_index] = idx
         return idx
 
     def beams_of(self, lamp_index: int) -> np.ndarray:
         """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
         if not self.agents:
             return _NO_INDICES
-        return np.flatnonzero(self.cand.beam_seen[:, lamp_index])
+        idx = self._beams_of_camera[lamp_index]
+        if idx is None:  # asked by the detector and the segmenter of each judged frame: found once
+            if self._cameras_seeing_beams is None:
+                self._cameras_seeing_beams = self.cand.beam_seen.any(axis=0).tolist()
+            idx = np.flatnonzero(self.cand.beam_seen[:, lamp_index]) if self._cameras_seeing_beams[lamp_index] \
+                else _NO_INDICES  # fmt: skip
+            self._beams_of_camera[lamp_index] = idx
+        return idx
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
         """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
@@ -175,6 +169,15 @@ class FastSensors:
             for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
                 self._boxes[(lamp_index, j)] = box
         return self._boxes[key]
+
+    def area_samples_of(self, kind: int, forward_m: float, lit: bool, age_bin: int, far_s: float) -> np.ndarray | None:
+        """The area samples of the first of a frame's ``threshold_conditions`` calibration saw (None:
+        none), looked up once per ``threshold_key``."""
+        key = threshold_key(kind, forward_m, lit, age_bin, far_s)
+        if key not in self._samples_by_key:
+            conditions = threshold_conditions(kind, forward_m, lit, age_bin, far_s)
+            self._samples_by_key[key] = next((self.area_samples[c] for c in conditions if c in self.area_samples), None)
+        return self._samples_by_key[key]
 
     def lit(self, lamp_index: int) -> int:
         return int(self.levels[lamp_index] >= LIT_LEVEL)
@@ -363,12 +366,14 @@ class SensedSegmenter(_LearningRate):
 
     def apply(self, frame: SensedFrame, learning_rate: float | None = None) -> _Areas:
         s, i = self.sensors, self.lamp_index
-        idx = s.candidates_of(i)
-        kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
-                                          s.cand.forward_m[idx, i], s.cand.beam_forward_m[s.beams_of(i), i])
+        idx, beams = s.candidates_of(i), s.beams_of(i)
+        if len(idx) or len(beams):
+            kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
+                                              s.cand.forward_m[idx, i], s.cand.beam_forward_m[beams, i])
+        else:  # nothing in view: what nearest_in_view says of no candidate and no beam
+            kind, forward_m = -1, math.nan
         far_s = s.changes.far_change_age_s(i, s.frame_k / s.fps) if kind < 0 else math.inf
-        conditions = threshold_conditions(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate), far_s)
-        samples = next((s.area_samples[c] for c in conditions if c in s.area_samples), None)
+        samples = s.area_samples_of(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate), far_s)
         # the frame's rank among its condition's (sorted) samples: kept from the last judged frame
         # with the model's persistence, so a big region lasts an episode as in the real frames
         if not (s.frame_k == self.last_frame_k + 1 and self.rng.random() < s.model.area_persistence):

@@ -137,6 +137,7 @@ class ZoneTracker:
         self._start_m, self._end_m = self._starts.tolist(), self._ends.tolist()
         self._t_s: float | None = None
         self._levels: list[float] | None = None
+        self._levels_array: np.ndarray | None = None  # the read-only array ``_levels`` was listed from
         self._tracks: dict[int, _Track] = {}
         self._done: deque[dict[str, Any]] = deque()
         self._lag = {c: QuantileSketch() for c in self.required_level}
@@ -174,7 +175,14 @@ class ZoneTracker:
         if self._t_s is not None and not t_s > self._t_s:
             raise ValueError(f"ZoneTracker.update t_s: must increase, got {t_s} after {self._t_s}")
         t_s = float(t_s)
-        level_list = levels.tolist()
+        if levels is self._levels_array:  # the same read-only levels (``LampStates``): listed already
+            level_list = self._levels
+        else:
+            level_list = levels.tolist()
+            self._levels_array = None if levels.flags.writeable else levels
+        if not agents and not self._tracks:  # nobody in the street, nobody to retire
+            self._t_s, self._levels = t_s, level_list
+            return
         seen: set[int] = set()
         for agent in agents:
             req = self.required_level.get(agent.cls)

@@ -15,6 +15,7 @@ shipped in the repository (``SHIPPED_DIR``, same name and key: calibrating takes
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import multiprocessing as mp
 import queue
@@ -55,10 +56,15 @@ def calibration_seeds(runs: int) -> list[int]:
     return [CALIBRATION_SEED_BASE + i for i in range(runs)]
 
 
+def general_model_path() -> Path:
+    """``detector.general_model.GENERAL_MODEL_PATH``, found without importing that module: it
+    imports scikit-learn (about 2 CPU-s), which a fast-mode run otherwise never needs."""
+    spec = importlib.util.find_spec("detector.general_model")
+    return Path(spec.origin).parent / "models" / "general.joblib"
+
+
 def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
     """A hash of everything the sensor model depends on (not the traffic's rates, not the seed)."""
-    from detector.general_model import GENERAL_MODEL_PATH
-
     street = build_street(scenario)
     parts = {
         "version": MODEL_VERSION,
@@ -69,7 +75,7 @@ def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
         "dim_level": scenario.lamps.luminaire.dim_level,
         "idle_frame_stride": scenario.simulation.idle_frame_stride,
         "kinds": sorted(scenario.traffic.reported_kinds()),
-        "detector_model_sha256": hashlib.sha256(GENERAL_MODEL_PATH.read_bytes()).hexdigest(),
+        "detector_model_sha256": hashlib.sha256(general_model_path().read_bytes()).hexdigest(),
         "calibration": {"duration_s": duration_s, "runs": runs, "controller": CALIBRATION_CONTROLLER},
     }
     return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()[:16]

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from citysim.control.lamps import Lamp, levels_at
+from citysim.control.lamps import Lamp
 from citysim.metrics.collector import Collector
 from citysim.world.street import Street
 
@@ -89,7 +89,7 @@ def film(night, renderers, controller, lamps: Sequence[Lamp], collectors: Sequen
     while True:
         yield env.timeout(max(0.0, k / fps - env.now))
         t = env.now
-        levels = levels_at(lamps, t)
+        levels = controller.ctx.lamp_states.levels_at(t)
         agents = night.agents
         for i in np.flatnonzero(schedule.active(k, t, agents, lamps, controller)):
             frame = renderers[i].render(t, agents, levels, frame_index=k)

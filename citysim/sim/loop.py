@@ -24,11 +24,11 @@ from typing import Any
 
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.base import ControlContext, Controller
-from citysim.control.lamps import Lamp, levels_at
+from citysim.control.lamps import Lamp
 from citysim.control.network import Network
 from citysim.control.registry import CONTROLLERS
 from citysim.fast import FIDELITIES
-from citysim.metrics.collector import Collector
+from citysim.metrics.collector import Collector, overriding
 from citysim.metrics.confusion import ConfusionCollector
 from citysim.metrics.crossings import CrossingsCollector
 from citysim.metrics.energy import EnergyCollector
@@ -162,9 +162,14 @@ def run_controller(
         *observers,
     ]
 
+    lamp_states = controller.ctx.lamp_states
+    # the base Collector's hooks do nothing: only the collectors that override one are called
+    step_collectors = overriding(collectors, "on_step")
+    frame_collectors = overriding(collectors, "on_frame")
+
     def after_step(t_s: float, agents) -> None:
-        levels = levels_at(lamps, t_s)
-        for collector in collectors:
+        levels = lamp_states.levels_at(t_s)
+        for collector in step_collectors:
             collector.on_step(t_s, agents, levels)
         controller.on_physics_step(t_s, agents)
 
@@ -174,12 +179,12 @@ def run_controller(
         if fast_cameras:
             from citysim.fast.sense import sense
 
-            night.env.process(sense(night, sensors, controller, lamps, collectors))
+            night.env.process(sense(night, sensors, controller, lamps, frame_collectors))
         else:
-            night.env.process(film(night, night.renderers(), controller, lamps, collectors))
+            night.env.process(film(night, night.renderers(), controller, lamps, frame_collectors))
     for i in range(len(lamps)):
         night.env.process(deliver_messages(night, controller, i))
-    _run_clock(night, collectors, on_progress)
+    _run_clock(night, overriding(collectors, "on_second"), on_progress)
 
     t_end = scenario.duration_s
     figures: dict[str, Any] = {"controller": spec.name}

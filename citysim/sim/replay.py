@@ -201,6 +201,8 @@ class TrafficReplay:
             self._load(self._chunk_index + 1)
         first, n, member, self.spawned_count = self._steps[self._step_in_chunk]
         self._step_in_chunk += 1
+        if not n:  # an empty street, most steps of a quiet hour
+            return []
         chunk = self._chunk
         out = []
         for oid, (x, y, heading, speed, phase) in zip(

@@ -200,3 +200,26 @@ def test_level_after_the_ramp_is_the_target_exactly_and_ramping_ends_there():
     assert lamp.level_at(1.0 + 0.8 * 0.3) == 1.0 and lamp.level_at(50.0) == 1.0
     lamp.set_target(2.0, 0.2)
     assert lamp.level_at(2.0 + 0.8 * 2.0) == 0.2 and lamp.level_at(3.0) == pytest.approx(0.5)
+
+
+def test_lamp_states_give_every_lamps_own_levels_and_ramping_bit_for_bit():
+    # LampStates reuses the levels read once every lamp settled, until a target changes: at random
+    # times and targets (ramps cut short, targets set again to the same level) it must say what the
+    # lamps themselves say
+    from citysim.control.lamps import LampStates, levels_at
+
+    spec = LuminaireSpec(rated_power_w=60.0, dim_level=0.2, ramp_up_s=0.3, fade_s=2.0)
+    lamps = [Lamp(i, spec, senses=True, initial_level=0.2) for i in range(5)]
+    states = LampStates(lamps)
+    rng = np.random.default_rng(11)
+    reused = 0
+    for t_s in np.cumsum(rng.choice([1 / 30, 1 / 60, 0.5, 3.0], size=3000, p=[0.6, 0.3, 0.08, 0.02])).tolist():
+        if rng.random() < 0.03:
+            lamps[int(rng.integers(5))].set_target(t_s, float(rng.choice([0.2, 0.6, 1.0])))
+        before = states._levels
+        levels = states.levels_at(t_s)
+        reused += levels is before
+        assert levels.tolist() == levels_at(lamps, t_s).tolist() and not levels.flags.writeable
+        assert list(states.ramping(t_s)) == [lamp.is_ramping(t_s) for lamp in lamps]
+        assert states.any_ramping(t_s) == any(lamp.is_ramping(t_s) for lamp in lamps)
+    assert reused > 1000  # most reads reuse the settled levels

@@ -12,6 +12,7 @@ from citysim.sim import calibration
 from citysim.sim.calibration import (
     calibrate,
     calibration_key,
+    general_model_path,
     model_path,
     record_run,
     sensor_model_for,
@@ -37,6 +38,13 @@ def test_a_short_full_fidelity_night_gives_candidate_and_frame_rows(scenario):
     # a hit carries the class the detector said; a miss none
     assert ((rows["det_class"] >= 0) == rows["hit"]).all()
     assert ((frames["area_fraction"] >= 0) & (frames["area_fraction"] <= 1)).all()
+
+
+def test_the_cache_key_hashes_the_detector_model_the_detector_loads():
+    # the key finds the model file without importing detector.general_model (scikit-learn)
+    from detector.general_model import GENERAL_MODEL_PATH
+
+    assert general_model_path() == GENERAL_MODEL_PATH
 
 
 def test_the_cache_key_follows_cameras_and_environment_not_seed_or_rates(scenario):
