@@ -127,36 +127,36 @@ def scalar_bin_of(value: float, edges: tuple[float, ...]) -> int:
     return min(max(bisect.bisect_right(edges, value) - 1, 0), len(edges) - 1)
 
 
-def threshold_conditions(kind: int, forward_m: float, lit: bool, age_bin: int,
-                         far_change_age_s: float = math.inf) -> tuple[str, ...]:  # fmt: skip
-    """The keys of the threshold samples of a frame, finest first (fast mode takes the first one
-    calibration saw): the subject (the nearest candidate's kind and distance bin, or nothing in
-    view, split by how long ago a lamp in the camera's far view changed level, ``FAR_CHANGE_EDGES_S``),
-    the camera's own lamp lit or dim, the background's age bin; then without the age; then, for a
-    candidate, without the light, and for a recent far change, nothing in view's keys. The light
-    matters: in calibration a walker made a region over 0.5 % of the frame in 15 % of the frames
-    under a lit lamp and in none under a dim one; so does a far lamp switching (its pool changes
-    the top of the frame; see ``citysim.fast.geometry.LevelChanges``)."""
-    own = "lit" if lit else "dim"
-    if kind >= 0:
-        subject = f"{KINDS[kind]}/{scalar_bin_of(forward_m, DISTANCE_EDGES_M)}"
-        return f"{subject}/{own}/age{age_bin}", f"{subject}/{own}", subject
-    keys = (f"none/{own}/age{age_bin}", f"none/{own}")
-    if far_change_age_s >= FAR_CHANGE_EDGES_S[-1]:
-        return keys
-    far = f"none/far{bisect.bisect_right(FAR_CHANGE_EDGES_S, far_change_age_s)}"
-    return (f"{far}/{own}/age{age_bin}", f"{far}/{own}") + keys
-
-
 def threshold_key(kind: int, forward_m: float, lit: bool, age_bin: int,
                   far_change_age_s: float = math.inf) -> tuple:  # fmt: skip
-    """All ``threshold_conditions`` of the same arguments depend on, as a tuple: frames of equal
-    keys have the same conditions, so fast mode looks a key's samples up once."""
+    """What a frame's ``threshold_conditions`` depend on: (kind, distance bin, lit, age bin, far
+    change bin); frames of equal keys have the same conditions, so fast mode looks a key's samples
+    up once."""
     if kind >= 0:
         return kind, scalar_bin_of(forward_m, DISTANCE_EDGES_M), lit, age_bin, None
-    far_bin = None if far_change_age_s >= FAR_CHANGE_EDGES_S[-1] else bisect.bisect_right(FAR_CHANGE_EDGES_S,
-                                                                                        far_change_age_s)  # fmt: skip
-    return kind, None, lit, age_bin, far_bin
+    far = FAR_CHANGE_EDGES_S
+    return kind, None, lit, age_bin, None if far_change_age_s >= far[-1] else bisect.bisect_right(far, far_change_age_s)
+
+
+def threshold_conditions(kind: int, forward_m: float, lit: bool, age_bin: int,
+                         far_change_age_s: float = math.inf) -> tuple[str, ...]:  # fmt: skip
+    """The keys of the threshold samples of a frame, finest first
+    (fast mode takes the first one calibration saw): the subject (the nearest candidate's kind and
+    distance bin, or nothing in view, split by how long ago a lamp in the camera's far view changed
+    level, ``FAR_CHANGE_EDGES_S``), the camera's own lamp lit or dim, the background's age bin; then
+    without the age; then, for a candidate, without the light, and for a recent far change, nothing
+    in view's keys. The light matters: in calibration a walker made a region over 0.5 % of the
+    frame in 15 % of the frames under a lit lamp and in none under a dim one; so does a far lamp
+    switching (its pool changes the top of the frame; see ``citysim.fast.geometry.LevelChanges``)."""
+    _, distance_bin, _, _, far_bin = threshold_key(kind, forward_m, lit, age_bin, far_change_age_s)
+    own = "lit" if lit else "dim"
+    if kind >= 0:
+        subject = f"{KINDS[kind]}/{distance_bin}"
+        return f"{subject}/{own}/age{age_bin}", f"{subject}/{own}", subject
+    keys = (f"none/{own}/age{age_bin}", f"none/{own}")
+    if far_bin is None:
+        return keys
+    return (f"none/far{far_bin}/{own}/age{age_bin}", f"none/far{far_bin}/{own}") + keys
 
 
 def nearest_in_view(kinds: np.ndarray, forward_m: np.ndarray, beam_forward_m: np.ndarray) -> tuple[int, float]:
