@@ -4,14 +4,10 @@ The truth of a judged frame is read by ``citysim.metrics.confusion``, which need
 to match them against detections (IoU); most frames with someone in view have no detection, and
 projecting the boxes was a tenth of a camera controller's cost. So a ``SensedTruth`` projects its
 box on the first read of x, y, w or h, from the agents of the frame it was made for.
+
+``sensors`` below is the ``citysim.fast.sensors.FastSensors`` that makes these objects; it is not
+imported here (that module imports this one).
 """
-
-from __future__ import annotations
-
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from citysim.fast.sensors import FastSensors
 
 #: Detector range, m: beyond it a candidate is not 'fully visible' truth for the confusion figures.
 DETECTOR_RANGE_M = 25.0
@@ -23,7 +19,7 @@ class SensedTruth:
 
     __slots__ = ("object_id", "cls", "fully_visible", "_sensors", "_agents", "_lamp_index", "_agent_index", "_box")
 
-    def __init__(self, sensors: FastSensors, lamp_index: int, agent_index: int, fully_visible: bool):
+    def __init__(self, sensors, lamp_index: int, agent_index: int, fully_visible: bool):
         agent = sensors.agents[agent_index]
         self.object_id: int = agent.object_id
         self.cls: str = agent.cls
@@ -60,7 +56,7 @@ class SensedTruth:
 class SensedFrame:
     """What fast mode passes where a frame would be: the camera's shape and its candidates' truth."""
 
-    def __init__(self, sensors: FastSensors, lamp_index: int):
+    def __init__(self, sensors, lamp_index: int):
         cam = sensors.geometry.cameras[lamp_index]
         self.shape = (cam.height_px, cam.width_px)
         self.sensors = sensors

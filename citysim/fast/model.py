@@ -11,8 +11,7 @@ whether the detector found each), it holds:
 * ``persistence``: per kind, the lag-1 correlation of hits of one candidate in consecutive
   frames (misses come in streaks: a person in a dark gap is missed for many frames together).
   Fast mode draws hits from a two-state Markov chain with the cell's P and this correlation.
-* ``class_given_hit``: the detector class a detected kind is reported as (its lamps ahead and
-  margins depend on it).
+* ``class_given_hit``: the detector class a detected kind is reported as (lamps ahead depend on it).
 * false alarms (insects, rain, branches): per judged frame with none running, the probability
   one starts (``fa_start_p``, by the camera's own lamp lit or dim), how many judged frames it
   lasts, and where it is reported (distance, box, class), as samples.
@@ -24,18 +23,16 @@ whether the detector found each), it holds:
 * ``plausible``: the same again on the frames ``detector_confirmed`` and ``detector_network``
   count per track: a frame's own target decision while no physics rule rules its track out, from
   the track's n-th sighting on (``citysim.control.track_windows``; the wait is in the tables, so
-  fast mode's windows do not wait again).
-  ``for_decisions()`` gives the model a controller draws from.
+  fast mode's windows do not wait again). ``for_decisions()`` gives the model a controller draws.
 * ``p_regions_idle``: P(a frame with no candidate holds some moving region) (keeps the camera
   judged every frame, as in full fidelity).
 * the threshold baselines' trigger: samples of the largest foreground region's share of the
   frame, per condition (``threshold_conditions``: nothing in view, or the nearest candidate's kind
   and distance bin, or with no candidate the nearest beam of a road user out of view; the
-  camera's own lamp lit or dim; the background's age), and
-  ``area_persistence``: how long a big region lasts (consecutive frames are nearly the same
-  picture: a share over 5 % is still over 5 % in the next frame 96 % of the time). Fast mode keeps
-  a frame's rank in its condition's samples with that probability, so big regions come in
-  episodes as they do, not as independent frames that would trigger every second.
+  camera's own lamp lit or dim; the background's age), and ``area_persistence``: how long a big
+  region lasts (consecutive frames are nearly the same picture: a share over 5 % is still over 5 %
+  in the next frame 96 % of the time). Fast mode keeps a frame's rank in its condition's samples
+  with that probability, so big regions come in episodes, not as independent frames.
 
 Saved as JSON (small tables and capped sample lists).
 """
@@ -130,24 +127,24 @@ def scalar_bin_of(value: float, edges: tuple[float, ...]) -> int:
 def threshold_key(kind: int, forward_m: float, lit: bool, age_bin: int,
                   far_change_age_s: float = math.inf) -> tuple:  # fmt: skip
     """What a frame's ``threshold_conditions`` depend on: (kind, distance bin, lit, age bin, far
-    change bin); frames of equal keys have the same conditions, so fast mode looks a key's samples
-    up once."""
+    change bin); frames of equal keys have the same conditions (fast mode looks them up once)."""
     if kind >= 0:
         return kind, scalar_bin_of(forward_m, DISTANCE_EDGES_M), lit, age_bin, None
-    far = FAR_CHANGE_EDGES_S
-    return kind, None, lit, age_bin, None if far_change_age_s >= far[-1] else bisect.bisect_right(far, far_change_age_s)
+    far = FAR_CHANGE_EDGES_S  # None: no far lamp changed level recently enough to matter
+    return kind, None, lit, age_bin, (None if far_change_age_s >= far[-1]
+                                      else bisect.bisect_right(far, far_change_age_s))
 
 
 def threshold_conditions(kind: int, forward_m: float, lit: bool, age_bin: int,
                          far_change_age_s: float = math.inf) -> tuple[str, ...]:  # fmt: skip
-    """The keys of the threshold samples of a frame, finest first
-    (fast mode takes the first one calibration saw): the subject (the nearest candidate's kind and
-    distance bin, or nothing in view, split by how long ago a lamp in the camera's far view changed
-    level, ``FAR_CHANGE_EDGES_S``), the camera's own lamp lit or dim, the background's age bin; then
-    without the age; then, for a candidate, without the light, and for a recent far change, nothing
-    in view's keys. The light matters: in calibration a walker made a region over 0.5 % of the
-    frame in 15 % of the frames under a lit lamp and in none under a dim one; so does a far lamp
-    switching (its pool changes the top of the frame; see ``citysim.fast.geometry.LevelChanges``)."""
+    """The keys of the threshold samples of a frame, finest first (fast mode takes the first one
+    calibration saw): the subject (the nearest candidate's kind and distance bin, or nothing in
+    view, split by how long ago a lamp in the camera's far view changed level), the camera's own
+    lamp lit or dim, the background's age bin; then without the age; then, for a candidate,
+    without the light, and for a recent far change, nothing in view's keys. The light matters: in
+    calibration a walker made a region over 0.5 % of the frame in 15 % of the frames under a lit
+    lamp and in none under a dim one; so does a far lamp switching (its pool changes the top of
+    the frame; see ``citysim.fast.geometry.LevelChanges``)."""
     _, distance_bin, _, _, far_bin = threshold_key(kind, forward_m, lit, age_bin, far_change_age_s)
     own = "lit" if lit else "dim"
     if kind >= 0:
