@@ -52,22 +52,11 @@ from detector.tracks.tracker import TrackSet
 if TYPE_CHECKING:
     from detector.classifier import DimensionalClassifier
 
-# numpy_predict_proba is served by the module __getattr__ below (it imports scikit-learn)
-__all__ = ["Detection", "Detector", "numpy_predict_proba"]  # noqa: F822
+__all__ = ["Detection", "Detector"]
 
 # frozen, so one shared default instance is safe
 _DEFAULT_SEGMENTER_PARAMS = SegmenterParams()
 _DEFAULT_DIVISION_PARAMS = DivisionParams()
-
-
-def __getattr__(name: str):
-    # numpy_predict_proba is re-exported lazily: its module imports scikit-learn (about 2 CPU-s),
-    # which a process that only needs ``Detection`` (citysim's fast mode) should not pay
-    if name == "numpy_predict_proba":
-        from detector.fast_proba import numpy_predict_proba
-
-        return numpy_predict_proba
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -160,7 +149,9 @@ class Detector:
             raise ValueError(
                 f"Detector target_threshold must be in [0, 1], got {target_threshold!r}"
             )
-        # the classifier's modules import scikit-learn: loaded by the first Detector, not on import
+        # the classifier's modules import scikit-learn (about 2 CPU-s): loaded by the first
+        # Detector, not on import, so a process that only needs ``Detection`` (fast mode's
+        # workers) does not pay for it
         from detector.fast_proba import camera_rows_proba, compiled_rows_proba, numpy_predict_proba
         from detector.general_model import default_model
 
