@@ -72,11 +72,10 @@ class FastSensors:
         self.cand = self.geometry.candidates([])
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
-        self._of_camera: list[np.ndarray | None] = [None] * self.geometry.n
-        self._beams_of_camera: list[np.ndarray | None] = [None] * self.geometry.n
-        self._cameras_seeing: list[bool] | None = None
+        #: per ``cand`` matrix ("seen", "beam_seen"), this step: (whether each camera sees any, each
+        #: camera's indices once found) (``_indices_seen``)
+        self._seen_by_camera: dict[str, tuple[list[bool], list]] = {}
         self._awake: list[bool] | None = None
-        self._cameras_seeing_beams: list[bool] | None = None
         self._cells: tuple | None = None
         self._lit_cells: np.ndarray | None = None
 
@@ -95,9 +94,7 @@ class FastSensors:
             self.cand = self.geometry.candidates(agents) if agents or self.agents else self.cand
             self.agents = agents
             self._boxes = {}
-            self._of_camera = [None] * self.geometry.n
-            self._beams_of_camera = [None] * self.geometry.n
-            self._cameras_seeing = self._cameras_seeing_beams = None
+            self._seen_by_camera = {}
             self._awake = None
             self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
@@ -117,27 +114,28 @@ class FastSensors:
         return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
-        if not self.agents:
-            return _NO_INDICES
-        idx = self._of_camera[lamp_index]
-        if idx is None:
-            if self._cameras_seeing is None:  # most cameras see nobody: told apart in one pass
-                self._cameras_seeing = self.cand.seen.any(axis=0).tolist()
-            idx = np.flatnonzero(self.cand.seen[:, lamp_index]) if self._cameras_seeing[lamp_index] else _NO_INDICES
-            self._of_camera[lamp_index] = idx
-        return idx
+        """Indices of camera ``lamp_index``'s road-user candidates this frame."""
+        return self._indices_seen("seen", lamp_index)
 
     def beams_of(self, lamp_index: int) -> np.ndarray:
         """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
+        return self._indices_seen("beam_seen", lamp_index)
+
+    def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
+        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index``, found once a step (the
+        detector and the segmenter of each judged frame both ask); most cameras see nobody, so the
+        cameras that see any are told apart in one pass."""
         if not self.agents:
             return _NO_INDICES
-        idx = self._beams_of_camera[lamp_index]
-        if idx is None:  # asked by the detector and the segmenter of each judged frame: found once
-            if self._cameras_seeing_beams is None:
-                self._cameras_seeing_beams = self.cand.beam_seen.any(axis=0).tolist()
-            idx = np.flatnonzero(self.cand.beam_seen[:, lamp_index]) if self._cameras_seeing_beams[lamp_index] \
-                else _NO_INDICES  # fmt: skip
-            self._beams_of_camera[lamp_index] = idx
+        seen = self._seen_by_camera.get(matrix)
+        if seen is None:
+            marks = getattr(self.cand, matrix)
+            seen = self._seen_by_camera[matrix] = (marks.any(axis=0).tolist(), [None] * self.geometry.n)
+        sees_any, indices = seen
+        idx = indices[lamp_index]
+        if idx is None:
+            idx = np.flatnonzero(getattr(self.cand, matrix)[:, lamp_index]) if sees_any[lamp_index] else _NO_INDICES
+            indices[lamp_index] = idx
         return idx
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
