@@ -234,14 +234,16 @@ def _add_cache(parser) -> None:
 def _add_calibrate_validate(sub) -> None:
     c = sub.add_parser("calibrate", help="fit a scenario's fast-mode sensor model",
                        description="Render and detect the scenario's cameras in full fidelity on calibration seeds "
-                                   "(never used for validation), fit the sensor model fast mode draws from, and "
+                                   "(never used for validation), busy nights and quiet nights with every lamp dim, fit the sensor model fast mode draws from, and "
                                    "cache it by a hash of the cameras, street, environment, traffic kinds and "
                                    "detector model.")
     c.add_argument("scenario", type=Path, help="scenario YAML file")
     _add_cache(c)
     c.add_argument("--duration", type=number(float, gt=0, le=MAX_DURATION_S, unit="s"), default=120.0,
                    help="simulated seconds per calibration night")
-    c.add_argument("--runs", type=number(int, ge=1), default=2, help="calibration nights (seeds)")
+    c.add_argument("--runs", type=number(int, ge=1), default=2,
+                   help="calibration nights of each kind: busy (the lamps switched as usual) and quiet (every "
+                        "lamp held dim), each on a seed of its own")
     c.add_argument("--workers", type=number(int, ge=1), default=2, help="parallel processes, one night each")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.set_defaults(func=cmd_calibrate)

@@ -32,7 +32,9 @@ SCENARIO = REPO / "scenarios" / "suburban_night.yaml"
 DEMO_NIGHT_S = 600.0
 CHECK_S = 60.0
 CHECK_CONTROLLERS = "pir,detector_confirmed,detector_located"
-YEAR_CONTROLLERS = "always_on,oracle,pir,schedule"
+#: the bound, the two conventional schemes (part-night schedule, PIR) and the camera controller a
+#: planner would install (``detector_located``), so the year answers "how much, and who is left dark"
+YEAR_CONTROLLERS = "always_on,oracle,pir,schedule,detector_located"
 YEAR_SAMPLE_S = 300.0
 
 

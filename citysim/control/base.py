@@ -75,8 +75,13 @@ class LampBank:
         # no hold runs out before this time: release_expired has nothing to do until then (lamps
         # start unheld, so the first call looks at every lamp, as a lamp starting at full needs)
         self._next_expiry_s = -math.inf
+        #: when set, triggers change nothing: calibration's quiet nights (``citysim.sim.calibration``)
+        #: run the cameras and the detector as usual on a street whose lamps all stay dim
+        self.held_dim = False
 
     def trigger(self, lamp_index: int, t_s: float, hold_s: float | None = None) -> None:
+        if self.held_dim:
+            return
         if self.triggers[lamp_index] == 0:
             self.first_trigger_s[lamp_index] = t_s
         self.last_trigger_s[lamp_index] = t_s

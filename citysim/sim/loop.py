@@ -124,6 +124,7 @@ def run_controller(
     sensor_model=None,
     sensors: object | None = None,
     observers: Sequence[Collector] = (),
+    lamps_held_dim: bool = False,
 ) -> dict:
     """Simulate the scenario's night under one controller; returns its summary (summary.json entry).
 
@@ -131,7 +132,8 @@ def run_controller(
     instead of stepping the world; the agents, and so the summary, are the same bit for bit.
     ``fidelity`` "fast" needs ``sensor_model`` (``citysim.fast.model.SensorModel``, see
     ``citysim.sim.calibration``). ``sensors`` replaces the cameras' detectors in full fidelity
-    (calibration records them); ``observers`` are extra collectors (calibration's recorder).
+    (calibration records them); ``observers`` are extra collectors (calibration's recorder);
+    ``lamps_held_dim`` leaves every lamp dim whatever the controller decides (calibration's quiet nights).
     """
     check_controllers([spec.name])
     check_fidelity(fidelity)
@@ -151,6 +153,7 @@ def run_controller(
         model = sensor_model.for_decisions(CONTROLLERS[spec.name].decisions(spec))
         sensors = fast_sensors(night, model)
     controller = build_controller(night, spec, sensors)
+    controller.bank.held_dim = lamps_held_dim
     lamps, label = controller.ctx.lamps, spec.display_name
     collectors: list[Collector] = [
         # the per-class figures list the detector's own classes always, other kinds when present

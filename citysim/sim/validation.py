@@ -61,9 +61,9 @@ FIGURES = (
 
 def validation_seeds(scenario: Scenario, count: int) -> list[int]:
     seeds = [scenario.seed + i for i in range(count)]
-    clash = sorted(set(seeds) & set(calibration_seeds(64)))
+    clash = sorted(set(seeds) & {seed for seed, _ in calibration_seeds(64)})
     if clash:
-        raise RunError(f"seed: {clash[0]} is a calibration seed; pick a scenario seed below {calibration_seeds(1)[0]}")
+        raise RunError(f"seed: {clash[0]} is a calibration seed; pick a scenario seed below {calibration_seeds(1)[0][0]}")
     return seeds
 
 

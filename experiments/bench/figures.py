@@ -292,9 +292,9 @@ def bench_sweep() -> dict:
 
 
 def bench_night_sample() -> dict:
-    from experiments.bench.night import bench_night
+    from experiments.bench.night import bench_night_full_hours
 
-    return bench_night()
+    return bench_night_full_hours()
 
 
 def bench_night_fast() -> dict:

@@ -27,5 +27,8 @@ def test_the_demo_runs_the_three_commands_in_order_and_says_where_the_reports_ar
     assert calls[0][calls[0].index("--fidelity") + 1] == "fast"
     assert calls[0][calls[0].index("--duration") + 1] == "28800"
     assert calls[1][calls[1].index("--duration") + 1] == f"{demo.CHECK_S:g}"
+    # the year sets the camera controller a planner would install beside the bound and the conventional schemes
+    year_controllers = calls[2][calls[2].index("--controllers") + 1].split(",")
+    assert {"oracle", "pir", "schedule", "detector_located"} <= set(year_controllers)
     out = capsys.readouterr().out
     assert str(tmp_path / "night" / "report.html") in out and str(tmp_path / "year" / "report.html") in out

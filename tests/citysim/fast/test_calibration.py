@@ -28,7 +28,7 @@ def scenario():
 
 @pytest.mark.slow
 def test_a_short_full_fidelity_night_gives_candidate_and_frame_rows(scenario):
-    rows, frames = record_run(scenario, calibration.calibration_seeds(1)[0], 6.0)
+    rows, frames = record_run(scenario, calibration.calibration_seeds(1)[0][0], 6.0)
     n = len(rows["hit"])
     assert n > 0 and all(len(v) == n for v in rows.values())
     assert len(frames["camera"]) >= 6 * 3  # every camera judged at least once a second
@@ -38,6 +38,25 @@ def test_a_short_full_fidelity_night_gives_candidate_and_frame_rows(scenario):
     # a hit carries the class the detector said; a miss none
     assert ((rows["det_class"] >= 0) == rows["hit"]).all()
     assert ((frames["area_fraction"] >= 0) & (frames["area_fraction"] <= 1)).all()
+
+
+@pytest.mark.slow
+def test_a_quiet_night_sees_everyone_under_dim_lamps_where_a_busy_one_lights_them(scenario):
+    from citysim.fast.model import LIT_LEVEL
+
+    seed = calibration.calibration_seeds(1)[0][0]
+    busy, _ = record_run(scenario, seed, 6.0)
+    quiet, quiet_frames = record_run(scenario, seed, 6.0, lamps_held_dim=True)
+    assert (busy["light"] >= LIT_LEVEL).any()  # the controller lit lamps for the people it saw
+    assert len(quiet["hit"]) > 0 and len(quiet_frames["camera"]) > 0
+    assert (quiet["light"] < LIT_LEVEL).all() and (quiet_frames["light"] < LIT_LEVEL).all()
+    assert not (quiet["young"] & (quiet["frame"] > 15)).any()  # no lamp switched: no background rebuilt
+
+
+def test_calibration_nights_are_busy_then_quiet_on_seeds_of_their_own():
+    nights = calibration.calibration_seeds(2)
+    assert [held for _, held in nights] == [False, False, True, True]
+    assert len({seed for seed, _ in nights}) == 4
 
 
 def test_the_cache_key_hashes_the_detector_model_the_detector_loads():

@@ -32,3 +32,11 @@ def test_an_hour_of_the_night_runs_at_its_clock_hour_and_its_traffic():
     assert tuple(fourth.traffic.classes.pedestrian.hourly_profile) == tuple(walkers[3:])
     with pytest.raises(ValueError, match="sample_s"):
         bench_night_fast(0.0)
+
+
+@pytest.mark.parametrize("sample_s", [0.0, 3600.5])
+def test_the_full_fidelity_hours_refuse_a_sample_outside_an_hour_before_any_work(sample_s):
+    from experiments.bench.night import bench_night_full_hours
+
+    with pytest.raises(ValueError, match="sample_s"):
+        bench_night_full_hours(sample_s)
