@@ -8,9 +8,8 @@ whether the detector found each), it holds:
   bearing, light level at the agent, young background, speed), binned. Sparse cells are shrunk
   toward their coarser parent (kind x distance x bearing x light, then kind x distance, then
   kind), each with ``PRIOR_FRAMES`` pseudo-frames, so a cell seen twice is not taken at its word.
-* ``persistence``: per kind, the lag-1 correlation of hits of one candidate in consecutive
-  frames (misses come in streaks: a person in a dark gap is missed for many frames together).
-  Fast mode draws hits from a two-state Markov chain with the cell's P and this correlation.
+* ``persistence``: per kind, the lag-1 correlation of one candidate's hits in consecutive frames
+  (misses come in streaks); fast mode draws hits from a two-state chain with the cell's P and it.
 * ``class_given_hit``: the detector class a detected kind is reported as (lamps ahead depend on it).
 * false alarms (insects, rain, branches): per judged frame with none running, the probability
   one starts (``fa_start_p``, by the camera's own lamp lit or dim), how many judged frames it
@@ -18,8 +17,7 @@ whether the detector found each), it holds:
 * ``track``: the same hit, persistence, class and false-alarm tables fitted on the detector's
   track decisions (a detection is a target when its track is: ``detector_tracked``, and fast
   mode's ``detector_located``) rather than each frame's own (``detector``; any controller with
-  ``tracking: false``). Insects seldom make a plausible target track, so the two false-alarm rates
-  differ several-fold.
+  ``tracking: false``). Insects seldom make a plausible target track: false-alarm rates differ.
 * ``plausible``: the same again on the frames ``detector_confirmed`` and ``detector_network``
   count per track: a frame's own target decision while no physics rule rules its track out, from
   the track's n-th sighting on (``citysim.control.track_windows``; the wait is in the tables, so
@@ -32,8 +30,9 @@ whether the detector found each), it holds:
   camera's own lamp lit or dim; the background's age), and ``area_persistence``: how long a big
   region lasts (consecutive frames are nearly the same picture: a share over 5 % is still over 5 %
   in the next frame 96 % of the time). Fast mode keeps a frame's rank in its condition's samples
-  with that probability, so big regions come in episodes, not as independent frames.
-
+  with that probability, so big regions come in episodes, not as independent frames. Fitted on
+  the busy calibration nights only: a threshold baseline lights its lamp once something big moves,
+  so nobody walks the length of its view in the dark as on the quiet nights (lamps held dim).
 Saved as JSON (small tables and capped sample lists).
 """
 
@@ -359,9 +358,10 @@ def fit_area_persistence(frames: dict[str, np.ndarray]) -> float:
 
 
 def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray], camera_hours: float,
-                     key: str = "", idle_frame_stride: int = 1) -> SensorModel:  # fmt: skip
-    """Fit from candidate ``rows`` and judged ``frames`` (column arrays, see ``citysim.fast.records``)
-    of runs that judged idle cameras every ``idle_frame_stride``-th frame."""
+                     key: str = "", idle_frame_stride: int = 1, area_frames: dict | None = None) -> SensorModel:  # fmt: skip
+    """Fit from candidate ``rows`` and judged ``frames`` (column arrays, ``citysim.fast.records``) of runs that
+    judged idle cameras every ``idle_frame_stride``-th frame; region sizes from ``area_frames`` (default: ``frames``)."""
+    area_frames = frames if area_frames is None else area_frames
     if len(frames["camera"]) == 0:
         raise ValueError("calibration: no judged camera frames to fit a sensor model on")
     cells = cell_of(rows["kind"], rows["forward_m"], rows["bearing_rad"], rows["light"], rows["young"],
@@ -376,8 +376,8 @@ def fit_sensor_model(rows: dict[str, np.ndarray], frames: dict[str, np.ndarray],
             fitted = _fit_decisions(cells, set_rows, set_frames, camera_hours)
             others[prefix] = {name: fitted[name] for name in TRACK_FIELDS}
     return SensorModel(
-        key=key, **decisions, area_fraction=fit_area_fractions(frames, idle_frame_stride),
-        area_persistence=fit_area_persistence(frames), frames=int(len(frames["camera"])),
+        key=key, **decisions, area_fraction=fit_area_fractions(area_frames, idle_frame_stride),
+        area_persistence=fit_area_persistence(area_frames), frames=int(len(frames["camera"])),
         candidate_frames=int(len(rows["hit"])), **others,
     )  # fmt: skip
 

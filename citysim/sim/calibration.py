@@ -91,7 +91,7 @@ def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
         "kinds": sorted(scenario.traffic.reported_kinds()),
         "detector_model_sha256": hashlib.sha256(general_model_path().read_bytes()).hexdigest(),
         "calibration": {"duration_s": duration_s, "runs": runs, "controller": CALIBRATION_CONTROLLER,
-                        "nights": calibration_seeds(runs)},
+                        "nights": calibration_seeds(runs), "region_sizes_from": "busy nights"},
     }
     return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
@@ -130,9 +130,13 @@ def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: 
     bar.close()
     rows = merge_columns([p[0] for p in parts])
     frames = merge_columns([p[1] for p in parts])
+    busy_frames = merge_columns([p[1] for p, (_, held_dim) in zip(parts, calibration_seeds(runs), strict=True)
+                                 if not held_dim])  # fmt: skip
     camera_hours = duration_s * len(parts) * len(build_street(scenario).lamps) / 3600.0
+    # the threshold baselines' region sizes from the busy nights: such a baseline lights its lamp as
+    # soon as something big moves, so nobody crosses its view in the dark as on the quiet nights
     model = fit_sensor_model(rows, frames, camera_hours, key=path.stem,
-                             idle_frame_stride=scenario.simulation.idle_frame_stride)
+                             idle_frame_stride=scenario.simulation.idle_frame_stride, area_frames=busy_frames)
     model.save(path)
     return model, path
 

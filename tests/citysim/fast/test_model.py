@@ -154,3 +154,14 @@ def test_a_saved_model_loads_equal(tmp_path):
 def test_no_judged_frames_is_an_error_naming_calibration():
     with pytest.raises(ValueError, match="calibration: no judged camera frames"):
         fit_sensor_model(rows(0), frames(0), camera_hours=1.0)
+
+
+def test_region_sizes_come_from_the_frames_given_for_them_and_false_alarms_from_all():
+    # calibration gives its busy nights' frames for the threshold baselines' region sizes
+    busy = frames(4, area_fraction=[0.0, 0.01, 0.0, 0.01])
+    quiet = frames(4, area_fraction=[0.2, 0.3, 0.2, 0.3], fa=[True, False, False, False])
+    both = {col: np.concatenate([busy[col], quiet[col]]) for col in busy}
+    model = fit_sensor_model(rows(0), both, camera_hours=1.0, area_frames=busy)
+    assert model.area_fraction["none/dim"] == [0.0, 0.01, 0.0, 0.01]
+    assert model.fa_start_p[0] > 0  # the quiet night's false alarm still counts
+    assert fit_sensor_model(rows(0), both, camera_hours=1.0).area_fraction["none/dim"] == list(both["area_fraction"])
