@@ -234,7 +234,8 @@ def _add_cache(parser) -> None:
 def _add_calibrate_validate(sub) -> None:
     c = sub.add_parser("calibrate", help="fit a scenario's fast-mode sensor model",
                        description="Render and detect the scenario's cameras in full fidelity on calibration seeds "
-                                   "(never used for validation), busy nights and quiet nights with every lamp dim, fit the sensor model fast mode draws from, and "
+                                   "(never used for validation), busy nights and quiet nights with every lamp dim, "
+                                   "fit the sensor model fast mode draws from, and "
                                    "cache it by a hash of the cameras, street, environment, traffic kinds and "
                                    "detector model.")
     c.add_argument("scenario", type=Path, help="scenario YAML file")
