@@ -112,6 +112,21 @@ def _run_clock(night: Night, collectors: Sequence[Collector], on_progress: Calla
                 collector.on_second(t)
 
 
+def _fast_cameras(scenario: Scenario, spec: ControllerSpec, fidelity: str, sensor_model) -> bool:
+    """Whether the run's cameras are judged by the sensor model; refuses what fast mode cannot run."""
+    check_controllers([spec.name])
+    check_fidelity(fidelity)
+    # controllers that watch no camera run alike in both fidelities and need no sensor model
+    fast_cameras = fidelity == "fast" and CONTROLLERS[spec.name].uses_camera
+    if fast_cameras and sensor_model is None:
+        raise RunError("fidelity: 'fast' needs a calibrated sensor model (citysim calibrate SCENARIO)")
+    if fast_cameras and scenario.lamps.cameras_per_pole > 1:
+        # the sensor model (citysim.fast) knows one camera per lamp
+        raise RunError("fidelity: 'fast' models one camera per pole; lamps.camera.back_heading_deg needs "
+                       "fidelity 'full'")
+    return fast_cameras
+
+
 def run_controller(
     scenario: Scenario,
     spec: ControllerSpec,
@@ -135,16 +150,7 @@ def run_controller(
     (calibration records them); ``observers`` are extra collectors (calibration's recorder);
     ``lamps_held_dim`` leaves every lamp dim whatever the controller decides (calibration's quiet nights).
     """
-    check_controllers([spec.name])
-    check_fidelity(fidelity)
-    # controllers that watch no camera run alike in both fidelities and need no sensor model
-    fast_cameras = fidelity == "fast" and CONTROLLERS[spec.name].uses_camera
-    if fast_cameras and sensor_model is None:
-        raise RunError("fidelity: 'fast' needs a calibrated sensor model (citysim calibrate SCENARIO)")
-    if fast_cameras and scenario.lamps.cameras_per_pole > 1:
-        # the sensor model (citysim.fast) knows one camera per lamp
-        raise RunError("fidelity: 'fast' models one camera per pole; lamps.camera.back_heading_deg needs "
-                       "fidelity 'full'")
+    fast_cameras = _fast_cameras(scenario, spec, fidelity, sensor_model)
     night = build_night(scenario, replay=None if traffic is None else TrafficReplay(traffic))
     if fast_cameras:
         from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
