@@ -30,7 +30,6 @@ import importlib.util
 import json
 import multiprocessing as mp
 import queue
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from tqdm import tqdm
@@ -41,6 +40,7 @@ from citysim.fast.geometry import CameraGeometry
 from citysim.fast.model import MODEL_VERSION, SensorModel, fit_sensor_model
 from citysim.fast.records import CalibrationRecorder, RecordingSensors, merge_columns
 from citysim.sim.loop import run_controller
+from citysim.sim.workers import spawn_pool
 from citysim.world.street import build_street
 
 CALIBRATION_CONTROLLER = "detector_confirmed"
@@ -169,8 +169,7 @@ def _record_runs(scenario: Scenario, duration_s: float, runs: int, workers: int,
                 for seed, held_dim in seeds]  # fmt: skip
     with mp.Manager() as manager:
         q = manager.Queue()
-        ctx = mp.get_context("spawn")  # fresh interpreters: no forked OpenCV/pymunk state
-        with ProcessPoolExecutor(max_workers=min(workers, len(seeds)), mp_context=ctx) as pool:
+        with spawn_pool(min(workers, len(seeds))) as pool:
             futures = [pool.submit(_record_worker, (scenario, seed, duration_s, q)) for seed in seeds]
             while not all(f.done() for f in futures):
                 try:

@@ -22,7 +22,6 @@ import os
 import queue
 import shutil
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from tqdm import tqdm
@@ -34,6 +33,7 @@ from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.calibration import sensor_model_for
 from citysim.sim.loop import check_controllers, check_fidelity, controller_spec, run_controller
 from citysim.sim.replay import record_traffic
+from citysim.sim.workers import spawn_pool
 from citysim.world.coverage import camera_coverage
 from citysim.world.street import build_street
 from detector.outdir import staged_output
@@ -176,8 +176,7 @@ def run_comparison(
         else:
             with mp.Manager() as manager:
                 q = manager.Queue()
-                ctx = mp.get_context("spawn")  # fresh interpreters: no forked OpenCV/pymunk state
-                with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+                with spawn_pool(workers) as pool:
                     # camera controllers first: the cheap ones fill the gaps at the end
                     heavy_first = sorted(specs, key=lambda s: not CONTROLLERS[s.name].uses_camera)
                     # the recorder first: the controllers replay its chunks as it writes them

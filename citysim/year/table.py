@@ -21,12 +21,11 @@ from __future__ import annotations
 
 import csv
 import json
-import multiprocessing as mp
 import shutil
 import tempfile
 from collections import defaultdict
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -35,6 +34,7 @@ from tqdm import tqdm
 from citysim.config.scenario import Scenario, override
 from citysim.config.year import YearSpec
 from citysim.sim.compare import resolve_controllers, run_comparison
+from citysim.sim.workers import spawn_pool
 from citysim.year.factors import target_classes
 
 J_PER_KWH = 3.6e6
@@ -154,8 +154,7 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
             results[cell] = run_cell(scenario, cell, names, fidelity)
             bar.update(cost[cell])
     else:
-        ctx = mp.get_context("spawn")  # fresh interpreters, as run_comparison's own workers
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        with spawn_pool(workers) as pool:  # fresh interpreters, as run_comparison's own workers
             futures = {pool.submit(run_cell, scenario, c, names, fidelity): c for c in cells}
             for done in as_completed(futures):
                 results[futures[done]] = done.result()
