@@ -148,7 +148,8 @@ def run_controller(
     ``fidelity`` "fast" needs ``sensor_model`` (``citysim.fast.model.SensorModel``, see
     ``citysim.sim.calibration``). ``sensors`` replaces the cameras' detectors in full fidelity
     (calibration records them); ``observers`` are extra collectors (calibration's recorder);
-    ``lamps_held_dim`` leaves every lamp dim whatever the controller decides (calibration's quiet nights).
+    ``lamps_held_dim``: the controller's triggers (``LampBank.trigger``, how every controller but the
+    clock schedules lights a lamp) change no level, so the lamps stay dim (calibration's quiet nights).
     """
     fast_cameras = _fast_cameras(scenario, spec, fidelity, sensor_model)
     night = build_night(scenario, replay=None if traffic is None else TrafficReplay(traffic))
