@@ -16,7 +16,7 @@ from pathlib import Path
 
 from citysim.year_cli import add_year
 from detector.cliargs import USAGE_EXIT, Parser, number
-from detector.outdir import OutputDirError, check_output_dir
+from detector.outdir import OutputDirError, check_output_dir, exit_on_terminate
 
 #: What each command's output folder holds ("plots/" a folder); an earlier one may be replaced
 #: (run, render) or resumed (sweep), a folder holding anything else is refused.
@@ -334,11 +334,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except _user_errors() as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return USAGE_EXIT
+    # killed from outside (SIGTERM), a job still removes its half-written output
+    with exit_on_terminate():
+        try:
+            return args.func(args)
+        except _user_errors() as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return USAGE_EXIT
 
 
 if __name__ == "__main__":

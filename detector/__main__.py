@@ -28,7 +28,7 @@ from tqdm import tqdm
 from detector.camera import CameraError, CameraModel
 from detector.classes import GENERAL_CAMERA_HEIGHT_M, GENERAL_MIN_VIEW_RANGE_M, GENERAL_TILT_DEG
 from detector.cliargs import USAGE_EXIT, Parser, number
-from detector.outdir import check_output_dir, check_output_file, staged_output
+from detector.outdir import check_output_dir, check_output_file, exit_on_terminate, staged_output
 from detector.video import (
     FrameScale,
     VideoError,
@@ -267,16 +267,18 @@ def _train_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    try:
-        if argv and argv[0] == "train":
-            return _train(_train_parser().parse_args(argv[1:]))
-        args = _detect_parser().parse_args(argv)
-        check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
-        summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
-                               args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video)
-    except USER_ERRORS as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return USAGE_EXIT
+    # killed from outside (SIGTERM), a job still removes its half-written output
+    with exit_on_terminate():
+        try:
+            if argv and argv[0] == "train":
+                return _train(_train_parser().parse_args(argv[1:]))
+            args = _detect_parser().parse_args(argv)
+            check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
+            summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
+                                   args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video)
+        except USER_ERRORS as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return USAGE_EXIT
     proc = summary["processing"]
     scaled = (f"processed at {proc['processing_width_px']}x{proc['processing_height_px']} px "
               f"(x{1 / proc['source_px_per_processing_px_x']:.3f}); boxes in the video's "

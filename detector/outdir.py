@@ -6,12 +6,21 @@ earlier output of the same kind (which the job may replace). ``staged_output`` w
 into a hidden staging folder beside the destination and moves them into place only when the
 whole job succeeded; on any error the staging folder, and any parent folder it had to create,
 is removed and the destination is left as it was.
+
+A job stopped from outside cleans up too: ``exit_on_terminate`` (the command-line entry points
+call it) turns SIGTERM, what ``kill`` and job schedulers send, into the same exit Ctrl-C takes,
+so the staging folder goes. A job killed outright (SIGKILL, a power cut) cannot clean up; its
+staging folder names its process, and the next job writing beside it removes it once that
+process is gone.
 """
 
 from __future__ import annotations
 
+import os
 import shutil
+import signal
 import tempfile
+import threading
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -63,13 +72,65 @@ def _check_writable(out: Path, arg: str) -> None:
                              "valid: a folder you can write to") from None
 
 
+#: exit status of a process ended by SIGTERM (128 + the signal's number), as shells report it
+TERMINATED_EXIT = 128 + signal.SIGTERM
+
+
+def _raise_exit(signum, frame) -> None:
+    raise SystemExit(TERMINATED_EXIT)
+
+
+@contextmanager
+def exit_on_terminate() -> Iterator[None]:
+    """Within this block SIGTERM ends the process as an exception (``SystemExit(143)``), so
+    ``finally`` blocks and ``staged_output`` clean up; the default action comes back after it.
+    Only from the main thread and only over the default action: a program embedding the job
+    keeps its own handler."""
+    install = threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    if install:
+        signal.signal(signal.SIGTERM, _raise_exit)
+    try:
+        yield
+    finally:
+        if install:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _stage_prefix(out: Path) -> str:
+    return f".{out.name}.partial-"
+
+
+def _process_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)  # signal 0: only asks whether the process exists
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else
+        return True
+    return True
+
+
+def remove_orphan_stages(out: Path) -> list[Path]:
+    """Remove the staging folders beside ``out`` whose job's process no longer exists (a job killed
+    outright); returns them. A stage whose name carries no process id is left alone."""
+    removed = []
+    prefix = _stage_prefix(out)
+    for stage in out.parent.glob(f"{prefix}*"):
+        pid = stage.name[len(prefix):].split("-", 1)[0]
+        if stage.is_dir() and pid.isdigit() and not _process_alive(int(pid)):
+            shutil.rmtree(stage, ignore_errors=True)
+            removed.append(stage)
+    return removed
+
+
 @contextmanager
 def staged_output(out_dir: str | Path) -> Iterator[Path]:
     """Yield a staging folder; on success move its files into ``out_dir``."""
     out = Path(out_dir)
     made = [p for p in (out.parent, *out.parent.parents) if not p.exists()]  # deepest first
     out.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    remove_orphan_stages(out)
+    stage = Path(tempfile.mkdtemp(prefix=f"{_stage_prefix(out)}{os.getpid()}-", dir=out.parent))
     try:
         yield stage
     except BaseException:

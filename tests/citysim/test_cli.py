@@ -301,3 +301,28 @@ def test_scenario_typo_on_the_command_line_suggests_the_field(tmp_path):
     assert res.returncode == 2
     assert "lamps.luminaire.dim_levle: unknown field; did you mean dim_level?" in res.stderr, res.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_run_stopped_by_sigterm_leaves_no_half_written_output(tmp_path):
+    """`kill` (SIGTERM) mid-run: the process ends with 143 and removes its staging folder, as Ctrl-C does."""
+    import signal
+    import time
+
+    out = tmp_path / "run"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "citysim", "run", str(tiny(tmp_path, duration_s=3600.0)), "--out", str(out),
+         "--no-progress", "--workers", "1", "--controllers", "always_on"],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 60.0
+        while not list(tmp_path.glob(".run.partial-*")) and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        assert list(tmp_path.glob(".run.partial-*")), "the run never started writing"
+        time.sleep(0.5)  # well into the simulation
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=60) == 143, proc.stderr.read()
+    finally:
+        proc.kill()
+    assert not out.exists()
+    assert not list(tmp_path.glob(".run.partial-*"))
