@@ -25,11 +25,9 @@ Conventions (see DESIGN.md):
 
 from __future__ import annotations
 
-import difflib
 import math
 import types
 import typing
-from collections.abc import Sequence
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -38,6 +36,7 @@ import cv2
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from detector.cliargs import did_you_mean
 from detector.yamlfile import read_yaml_mapping
 
 #: A row whose depression below the horizon is at or below this, rad, has no ground point
@@ -289,21 +288,11 @@ def format_validation_error(exc: ValidationError, model: type[BaseModel] | None 
         msg = err["msg"].removeprefix("Value error, ")
         if err["type"] == "extra_forbidden":
             valid = (err.get("ctx") or {}).get("valid_fields") or _field_names_at(model, tuple(err["loc"][:-1]))
-            msg = "unknown field" + _nearest_names(str(err["loc"][-1]) if err["loc"] else "", valid)
+            msg = "unknown field" + did_you_mean(str(err["loc"][-1]) if err["loc"] else "", valid)
         got = err.get("input")
         got_txt = "" if err["type"] in ("missing", "extra_forbidden") or isinstance(got, dict) else f" (got {got!r})"
         lines.append(f"{loc}: {msg}{got_txt}")
     return "; ".join(lines)
-
-
-def _nearest_names(name: str, valid: Sequence[str]) -> str:
-    """'; did you mean x?' for a near miss, else '; valid: a, b, c' (empty without names)."""
-    if not valid:
-        return ""
-    near = difflib.get_close_matches(name, list(valid), n=2, cutoff=0.6)
-    if near:
-        return f"; did you mean {' or '.join(near)}?"
-    return f"; valid: {', '.join(valid)}"
 
 
 def _field_names_at(model: type[BaseModel] | None, path: tuple) -> list[str]:

@@ -8,11 +8,26 @@ the command line is read, before any file is opened or any frame is simulated.
 from __future__ import annotations
 
 import argparse
+import difflib
+import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import NoReturn
 
 USAGE_EXIT = 2
+# argparse's words for a value outside ``choices``: "invalid choice: 'fas' (choose from 'full', 'fast')"
+_INVALID_CHOICE = re.compile(r"invalid choice: '(?P<given>[^']*)' \(choose from (?P<choices>.*)\)$")
+
+
+def did_you_mean(name: str, valid: Sequence[str]) -> str:
+    """'; did you mean x?' for a near miss of one of ``valid``, else '; valid: a, b, c' (empty
+    without names): what every bad-name message ends with."""
+    if not valid:
+        return ""
+    near = difflib.get_close_matches(name, list(valid), n=2, cutoff=0.6)
+    if near:
+        return f"; did you mean {' or '.join(near)}?"
+    return f"; valid: {', '.join(valid)}"
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -43,6 +58,12 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         # argparse prints the usage block first; a user reads one line naming the argument better
+        choice = _INVALID_CHOICE.search(message)
+        if choice:  # argparse lists the choices; a near miss is worth naming (Python 3.14 does too)
+            valid = [c.strip().strip("'") for c in choice["choices"].split(",")]
+            near = difflib.get_close_matches(choice["given"], valid, n=1, cutoff=0.6)
+            if near:
+                message += f"; did you mean '{near[0]}'?"
         print(f"error: {message} (see {self.prog} --help)", file=sys.stderr)
         self.exit(USAGE_EXIT)
 

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import yaml
 
+from detector.cliargs import did_you_mean
+
 
 def read_yaml_mapping(path: str | Path, kind: str, error: type[Exception], holds: str = "fields") -> dict:
     """The mapping at the top of a YAML file; ``error`` names the file and what is wrong.
@@ -17,7 +19,7 @@ def read_yaml_mapping(path: str | Path, kind: str, error: type[Exception], holds
     try:
         data = yaml.safe_load(path.read_text())
     except FileNotFoundError:
-        raise error(f"{path}: {kind} file not found") from None
+        raise error(f"{path}: {kind} file not found{_nearby_yaml(path)}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise error(f"{path}: cannot read {kind} file ({exc})") from None
     except yaml.YAMLError as exc:
@@ -25,3 +27,17 @@ def read_yaml_mapping(path: str | Path, kind: str, error: type[Exception], holds
     if not isinstance(data, dict):
         raise error(f"{path}: a {kind} is a YAML mapping of {holds}, got {type(data).__name__}")
     return data
+
+
+def _nearby_yaml(path: Path) -> str:
+    """'; did you mean <folder>/x.yaml?' for a near miss among the YAML files beside ``path`` (the
+    folder's files are not listed otherwise: a folder may hold many)."""
+    folder = path.parent
+    if not folder.is_dir():
+        return ""
+    names = sorted(p.name for p in folder.iterdir() if p.suffix in (".yaml", ".yml"))
+    hint = did_you_mean(path.name, names)
+    if not hint.startswith("; did you mean"):
+        return ""
+    near = hint.removeprefix("; did you mean ").removesuffix("?").split(" or ")
+    return f"; did you mean {' or '.join(str(folder / n) for n in near)}?"

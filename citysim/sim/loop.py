@@ -37,6 +37,7 @@ from citysim.metrics.lamp_log import LampLog
 from citysim.sim.cameras import film
 from citysim.sim.night import Night, build_night
 from citysim.sim.replay import TrafficReplay
+from detector.cliargs import did_you_mean
 
 #: The keys of one controller's summary, in the order summary.json lists them.
 SUMMARY_KEYS = (
@@ -68,7 +69,8 @@ def controller_spec(scenario: Scenario, name: str) -> ControllerSpec:
 def check_controllers(names: list[str]) -> None:
     unknown = [n for n in names if n not in CONTROLLERS]
     if unknown:
-        raise RunError(f"controllers: unknown {', '.join(map(repr, unknown))}; valid: {', '.join(CONTROLLERS)}")
+        names = ", ".join(map(repr, unknown))
+        raise RunError(f"controllers: unknown {names}{did_you_mean(unknown[0], list(CONTROLLERS))}")
 
 
 def build_controller(night: Night, spec: ControllerSpec, sensors: object | None = None) -> Controller:

@@ -123,7 +123,28 @@ def test_bad_scenario_is_one_clear_error_and_exit_2(tmp_path, change, needles):
 
 def test_unknown_controller_on_the_command_line(tmp_path):
     res = cli("run", str(tiny(tmp_path)), "--out", str(tmp_path / "o"), "--controllers", "always_on,nope")
-    assert res.returncode == 2 and "controllers: unknown 'nope'" in res.stderr
+    assert res.returncode == 2 and "controllers: unknown 'nope'; valid: always_on, oracle" in res.stderr
+
+
+@pytest.mark.parametrize(("argv", "needles"), [
+    (["run", "{tiny}", "--out", "{out}", "--controllers", "detector_locatd"],
+     ["controllers: unknown 'detector_locatd'; did you mean detector_located"]),
+    (["run", "{tmp}/tiny.yml", "--out", "{out}"], ["tiny.yml: scenario file not found; did you mean {tmp}/tiny.yaml?"]),
+    (["sweep", "{tiny}", "--out", "{out}", "--fidelity", "fas"], ["invalid choice: 'fas'", "did you mean 'fast'?"]),
+    (["rn", "{tiny}"], ["invalid choice: 'rn'", "did you mean 'run'?"]),
+])  # fmt: skip
+def test_a_near_miss_is_named(tmp_path, capsys, argv, needles):
+    """A misspelt controller, scenario file, choice or command: one line, exit 2, the nearest valid name."""
+    fill = {"tiny": str(tiny(tmp_path)), "out": str(tmp_path / "o"), "tmp": str(tmp_path)}
+    with pytest.raises(SystemExit) as stop:
+        code = main([a.format(**fill) for a in argv])
+        raise SystemExit(code)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    for needle in needles:
+        assert needle.format(**fill) in err, err
+    assert not (tmp_path / "o").exists()
 
 
 # ------------------------------------------------- arguments and --out checked before any simulation
