@@ -10,9 +10,13 @@ from typing import Any
 
 import numpy as np
 
+from citysim.config.kinds import TARGET_KINDS
 from citysim.metrics.collector import Collector
 from citysim.world.agents import AgentState
 from citysim.world.street import Street
+
+#: The kinds ``AgentState.is_target`` is true of, as a set: asked of every agent every step.
+_TARGET_KINDS = frozenset(TARGET_KINDS)
 
 
 class FalseOnTime(Collector):
@@ -36,9 +40,12 @@ class FalseOnTime(Collector):
             self._levels_seen = None if levels.flags.writeable else levels
         if not self._lit_lamps:  # nothing lit: nothing to add
             return
-        target_x_m = [a.x_m for a in agents if a.is_target]
-        starts, ends = self.starts_m, self.ends_m
-        unoccupied = sum(1 for j in self._lit_lamps if not any(starts[j] <= x < ends[j] for x in target_x_m))
+        target_x_m = [a.x_m for a in agents if a.cls in _TARGET_KINDS]
+        if target_x_m:
+            starts, ends = self.starts_m, self.ends_m
+            unoccupied = sum(1 for j in self._lit_lamps if not any(starts[j] <= x < ends[j] for x in target_x_m))
+        else:  # nobody to light for: every lit lamp is on for nobody
+            unoccupied = len(self._lit_lamps)
         self.seconds += self.dt_s * float(unoccupied)
 
     def finish(self, t_end_s: float) -> dict[str, Any]:
