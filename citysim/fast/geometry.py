@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -75,7 +75,9 @@ class Candidates:
 
     def rows(self, first: int, n: int) -> Candidates:
         """The candidates of agents ``first`` to ``first + n`` only (one step's of many steps' rows)."""
-        return Candidates(*(getattr(self, f.name)[first : first + n] for f in fields(self)))
+        rows = slice(first, first + n)
+        return Candidates(self.forward_m[rows], self.bearing_rad[rows], self.seen[rows], self.wake[rows],
+                          self.beam_seen[rows], self.beam_forward_m[rows], self.beam_bearing_rad[rows])  # fmt: skip
 
 
 class CameraGeometry:
