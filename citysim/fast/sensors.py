@@ -76,11 +76,13 @@ class FastSensors:
         self.cand = self.step.cand
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
-        #: per ``cand`` matrix ("seen", "beam_seen"), this step: (whether each camera sees any, each
-        #: camera's indices once found) (``_indices_seen``)
-        self._seen_by_camera: dict[str, tuple[list[bool], list]] = {}
+        #: per ``cand`` matrix ("seen", "beam_seen"), this step: the agents it marks, camera by camera,
+        #: and where each camera's start in them (``_indices_seen``)
+        self._seen_by_camera: dict[str, tuple[np.ndarray, list[int]]] = {}
+        self._camera_bounds = np.arange(self.geometry.n + 1)
         self._awake: list[bool] | None = None
         self._lit_cells: np.ndarray | None = None
+        self._lamps_lit: list[int] | None = None  # ``lit`` of every lamp this frame, on first ask
 
     def detectors(self, ctx, threshold: float) -> list[SensedDetector]:
         return [SensedDetector(self, i, threshold) for i in range(self.geometry.n)]
@@ -110,6 +112,7 @@ class FastSensors:
         else:
             self.light = _NO_LIGHT
         self._lit_cells = None
+        self._lamps_lit = None
 
     def awake_cameras(self) -> list[bool]:
         """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
@@ -126,21 +129,16 @@ class FastSensors:
         return self._indices_seen("beam_seen", lamp_index)
 
     def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
-        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index``, found once a step (the
-        detector and the segmenter of each judged frame both ask); most cameras see nobody, so the
-        cameras that see any are told apart in one pass."""
+        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index``: every camera's found in
+        one pass once a step (the detector and the segmenter of each judged frame both ask)."""
         if not self.agents:
             return _NO_INDICES
         seen = self._seen_by_camera.get(matrix)
-        if seen is None:
-            marks = getattr(self.cand, matrix)
-            seen = self._seen_by_camera[matrix] = (marks.any(axis=0).tolist(), [None] * self.geometry.n)
-        sees_any, indices = seen
-        idx = indices[lamp_index]
-        if idx is None:
-            idx = np.flatnonzero(getattr(self.cand, matrix)[:, lamp_index]) if sees_any[lamp_index] else _NO_INDICES
-            indices[lamp_index] = idx
-        return idx
+        if seen is None:  # the marks camera by camera, each camera's agents in ascending order
+            cameras, agents = np.nonzero(getattr(self.cand, matrix).T)
+            seen = self._seen_by_camera[matrix] = (agents, np.searchsorted(cameras, self._camera_bounds).tolist())
+        agents, starts = seen
+        return agents[starts[lamp_index] : starts[lamp_index + 1]]
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
         """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
@@ -176,7 +174,10 @@ class FastSensors:
         return self._samples_by_key[key]
 
     def lit(self, lamp_index: int) -> int:
-        return int(self.levels[lamp_index] >= LIT_LEVEL)
+        """1 when lamp ``lamp_index`` is lit this frame, else 0 (every lamp's read once per frame)."""
+        if self._lamps_lit is None:
+            self._lamps_lit = (self.levels >= LIT_LEVEL).astype(int).tolist()
+        return self._lamps_lit[lamp_index]
 
 
 class _LearningRate:
