@@ -103,8 +103,9 @@ class LightChangeWatch:
 
     def check(self, camera_index: int, t_s: float) -> str:
         """'changing' (skip this frame), 'settled' (rebuild the background, then judge) or 'steady'."""
-        ramping = self.ctx.lamp_states.ramping(t_s)
-        changing = any(ramping[j] for j in self.watched[camera_index])
+        states = self.ctx.lamp_states
+        # most frames no lamp ramps: then none of the watched ones does
+        changing = states.any_ramping(t_s) and any(states.ramping(t_s)[j] for j in self.watched[camera_index])
         was = self.was_changing[camera_index]
         self.was_changing[camera_index] = changing
         if changing:

@@ -60,13 +60,24 @@ class Candidates:
     forward_m: np.ndarray  # (A, C) forward ground distance of every agent from every camera
     bearing_rad: np.ndarray  # (A, C)
     seen: np.ndarray  # (A, C) bool: a candidate of that camera
-    awake: np.ndarray  # (C,) bool: something within the wider wake view
+    wake: np.ndarray  # (A, C) bool: within that camera's wider wake view
     #: (A, C) bool: a *beam candidate*: a road user carrying a light, not itself a candidate of that
     #: camera, whose beam's middle (``BEAM_AHEAD_M`` ahead) is in the camera's view; the beam's
-    #: forward distance and bearing from that camera
+    #: forward distance and bearing from that camera (only meant where ``beam_seen``)
     beam_seen: np.ndarray
     beam_forward_m: np.ndarray
     beam_bearing_rad: np.ndarray
+
+    @property
+    def awake(self) -> np.ndarray:
+        """(C,) bool: something within the camera's wider wake view."""
+        return self.wake.any(axis=0)
+
+    def rows(self, first: int, n: int) -> Candidates:
+        """The candidates of agents ``first`` to ``first + n`` only (one step's of many steps' rows)."""
+        rows = slice(first, first + n)
+        return Candidates(self.forward_m[rows], self.bearing_rad[rows], self.seen[rows], self.wake[rows],
+                          self.beam_seen[rows], self.beam_forward_m[rows], self.beam_bearing_rad[rows])  # fmt: skip
 
 
 class CameraGeometry:
@@ -92,21 +103,26 @@ class CameraGeometry:
 
     def candidates(self, agents: Sequence[AgentState]) -> Candidates:
         xy = np.array([[a.x_m, a.y_m] for a in agents], dtype=np.float64).reshape(-1, 2)
+        lit = np.array([a.light_on for a in agents], dtype=bool)
+        heading = np.array([a.heading_rad for a in agents], dtype=np.float64) if lit.any() else None
+        return self.candidates_at(xy, lit, heading)
+
+    def candidates_at(self, xy: np.ndarray, lit: np.ndarray, heading: np.ndarray | None) -> Candidates:
+        """``candidates`` of agents standing at ``xy`` (A, 2; m) with their lights on where ``lit``
+        (A,), heading ``heading`` (A,; rad; None when no light is on). Every value is elementwise, so
+        the rows of many steps at once give each step's own, bit for bit."""
         forward, bearing = self._view(xy)
         off = np.abs(bearing)
         seen = (forward > 0.0) & (forward <= CANDIDATE_RANGE_M) & (off <= self.half_fov_rad + BEARING_MARGIN_RAD)
         wake = (forward > 0.0) & (forward <= WAKE_RANGE_M) & (off <= self.half_fov_rad + WAKE_MARGIN_RAD)
-        lit = np.array([a.light_on for a in agents], dtype=bool)
-        if lit.any():
-            heading = np.array([a.heading_rad for a in agents], dtype=np.float64)
+        if heading is not None and lit.any():
             beam_xy = xy + BEAM_AHEAD_M * np.column_stack([np.cos(heading), np.sin(heading)])
             beam_forward, beam_bearing = self._view(beam_xy)
             beam_seen = (lit[:, None] & ~seen & (beam_forward > 0.0) & (beam_forward <= CANDIDATE_RANGE_M)
                          & (np.abs(beam_bearing) <= self.half_fov_rad + BEARING_MARGIN_RAD))  # fmt: skip
         else:
             beam_forward, beam_bearing, beam_seen = forward, bearing, np.zeros_like(seen)
-        return Candidates(forward, bearing, seen, wake.any(axis=0) if len(xy) else np.zeros(self.n, bool),
-                          beam_seen, beam_forward, beam_bearing)  # fmt: skip
+        return Candidates(forward, bearing, seen, wake, beam_seen, beam_forward, beam_bearing)
 
     def _view(self, xy_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(A, C) forward ground distance (m) and bearing (rad) of ground points from every camera."""
@@ -117,10 +133,13 @@ class CameraGeometry:
         lateral = -dx * hy + dy * hx
         return forward, np.arctan2(lateral, forward)
 
+    def nearest_lamp(self, x_m: np.ndarray) -> np.ndarray:
+        """The index of the lamp nearest along the street to each ``x_m``."""
+        return np.abs(np.asarray(x_m, dtype=np.float64)[:, None] - self.lamp_x_m[None, :]).argmin(axis=1)
+
     def light_at(self, x_m: np.ndarray, levels: np.ndarray) -> np.ndarray:
         """The level (0..1) of the lamp nearest along the street to each ``x_m``."""
-        nearest = np.abs(np.asarray(x_m, dtype=np.float64)[:, None] - self.lamp_x_m[None, :]).argmin(axis=1)
-        return np.asarray(levels, dtype=np.float64)[nearest]
+        return np.asarray(levels, dtype=np.float64)[self.nearest_lamp(x_m)]
 
     def beam_box_px(self, lamp_index: int, agent: AgentState, ahead_m: float = BEAM_AHEAD_M) -> tuple[int, int, int, int]:
         """The box of the patch ``agent``'s light throws ``ahead_m`` ahead of it, in camera

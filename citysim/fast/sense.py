@@ -36,7 +36,8 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
             k += 1  # a still street with nothing moving in view: no camera is judged
             continue
         ramping = lamp_states.ramping(t)
-        sensors.observe(k, agents, lamp_states.levels_at(t))
+        rows = night.replay.rows_of(agents) if night.replay is not None else None
+        sensors.observe(k, agents, lamp_states.levels_at(t), rows)
         awake = sensors.awake_cameras()
         for i in range(n):
             if not (every or awake[i] or controller.motion_seen(i)

@@ -34,6 +34,7 @@ from citysim.fast.model import (
     threshold_key,
 )
 from citysim.fast.records import is_young
+from citysim.fast.steps import StepGeometries
 from detector.detector import Detection
 from detector.segment import SegmenterParams
 
@@ -69,15 +70,19 @@ class FastSensors:
         #: when the lamps' levels last changed: only the threshold baselines' segmenters read it, so
         #: it is kept (every observed frame) only once one of them is made
         self.changes: LevelChanges | None = None
-        self.cand = self.geometry.candidates([])
+        self.steps = StepGeometries(self.geometry)
+        #: the agents' geometry this frame (``citysim.fast.steps``); ``cand`` its candidates
+        self.step = self.steps.of([], None)
+        self.cand = self.step.cand
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
-        #: per ``cand`` matrix ("seen", "beam_seen"), this step: (whether each camera sees any, each
-        #: camera's indices once found) (``_indices_seen``)
-        self._seen_by_camera: dict[str, tuple[list[bool], list]] = {}
+        #: per ``cand`` matrix ("seen", "beam_seen"), this step: the agents it marks, camera by camera,
+        #: and where each camera's start in them (``_indices_seen``)
+        self._seen_by_camera: dict[str, tuple[np.ndarray, list[int]]] = {}
+        self._camera_bounds = np.arange(self.geometry.n + 1)
         self._awake: list[bool] | None = None
-        self._cells: tuple | None = None
         self._lit_cells: np.ndarray | None = None
+        self._lamps_lit: list[int] | None = None  # ``lit`` of every lamp this frame, on first ask
 
     def detectors(self, ctx, threshold: float) -> list[SensedDetector]:
         return [SensedDetector(self, i, threshold) for i in range(self.geometry.n)]
@@ -86,26 +91,28 @@ class FastSensors:
         self.changes = LevelChanges(self.geometry)
         return [SensedSegmenter(self, i) for i in range(self.geometry.n)]
 
-    def observe(self, frame_k: int, agents: list, levels: np.ndarray) -> None:
-        """The agents and lamp levels of frame ``frame_k`` (before any camera of it is judged)."""
+    def observe(self, frame_k: int, agents: list, levels: np.ndarray, rows: tuple | None = None) -> None:
+        """The agents and lamp levels of frame ``frame_k`` (before any camera of it is judged);
+        ``rows``: where ``agents`` stand in a replayed chunk's columns (``TrafficReplay.rows_of``)."""
         self.frame_k = frame_k
         if agents is not self.agents:
             # an empty street has no candidates, whichever empty list the step gave
-            self.cand = self.geometry.candidates(agents) if agents or self.agents else self.cand
+            if agents or self.agents:
+                self.step = self.steps.of(agents, rows)
+                self.cand = self.step.cand
             self.agents = agents
             self._boxes = {}
             self._seen_by_camera = {}
             self._awake = None
-            self._cells = None  # every (agent, camera) pair's p_hit cell, on first use
         self.levels = levels
         if self.changes is not None:
             self.changes.update(frame_k / self.fps, levels)
-        if agents:
-            xs = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
-            self.light = self.geometry.light_at(xs, levels)
+        if agents:  # the level of the lamp nearest each agent
+            self.light = np.asarray(levels, dtype=np.float64)[self.step.nearest_lamp]
         else:
             self.light = _NO_LIGHT
         self._lit_cells = None
+        self._lamps_lit = None
 
     def awake_cameras(self) -> list[bool]:
         """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
@@ -122,36 +129,25 @@ class FastSensors:
         return self._indices_seen("beam_seen", lamp_index)
 
     def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
-        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index``, found once a step (the
-        detector and the segmenter of each judged frame both ask); most cameras see nobody, so the
-        cameras that see any are told apart in one pass."""
+        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index``: every camera's found in
+        one pass once a step (the detector and the segmenter of each judged frame both ask)."""
         if not self.agents:
             return _NO_INDICES
         seen = self._seen_by_camera.get(matrix)
-        if seen is None:
-            marks = getattr(self.cand, matrix)
-            seen = self._seen_by_camera[matrix] = (marks.any(axis=0).tolist(), [None] * self.geometry.n)
-        sees_any, indices = seen
-        idx = indices[lamp_index]
-        if idx is None:
-            idx = np.flatnonzero(getattr(self.cand, matrix)[:, lamp_index]) if sees_any[lamp_index] else _NO_INDICES
-            indices[lamp_index] = idx
-        return idx
+        if seen is None:  # the marks camera by camera, each camera's agents in ascending order
+            cameras, agents = np.nonzero(getattr(self.cand, matrix).T)
+            seen = self._seen_by_camera[matrix] = (agents, np.searchsorted(cameras, self._camera_bounds).tolist())
+        agents, starts = seen
+        return agents[starts[lamp_index] : starts[lamp_index + 1]]
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
         """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
 
-        The cells of every agent for every camera are binned once per frame (one numpy pass, not
-        one per camera); the light bin once per frame's levels."""
-        if self._cells is None:
-            kinds = np.array([KINDS.index(a.cls) for a in self.agents], dtype=np.int64)
-            speed = np.array([a.speed_mps for a in self.agents], dtype=np.float64)
-            cells = cell_of(kinds[:, None], self.cand.forward_m, self.cand.bearing_rad, np.zeros(1), np.zeros(1),
-                            speed[:, None])  # fmt: skip
-            self._cells = (cells[0][:, 0], cells[1], cells[2], cells[5][:, 0])
+        The cells of every agent for every camera are binned once per step (``StepGeometry.cells``,
+        not one per camera); the light bin once per frame's levels."""
         if self._lit_cells is None:
             self._lit_cells = (self.light >= LIT_LEVEL).astype(np.int64)
-        kind, distance, bearing, speed = self._cells
+        kind, distance, bearing, speed = self.step.cells
         return self.p_hit[kind[idx], distance[idx, lamp_index], bearing[idx, lamp_index], self._lit_cells[idx],
                           int(young), speed[idx]]  # fmt: skip
 
@@ -178,7 +174,10 @@ class FastSensors:
         return self._samples_by_key[key]
 
     def lit(self, lamp_index: int) -> int:
-        return int(self.levels[lamp_index] >= LIT_LEVEL)
+        """1 when lamp ``lamp_index`` is lit this frame, else 0 (every lamp's read once per frame)."""
+        if self._lamps_lit is None:
+            self._lamps_lit = (self.levels >= LIT_LEVEL).astype(int).tolist()
+        return self._lamps_lit[lamp_index]
 
 
 class _LearningRate:

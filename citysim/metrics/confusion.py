@@ -139,11 +139,15 @@ class DetectionConfusion:
         t_s: float,
     ) -> None:
         """Count one frame of lamp ``lamp_index``'s camera at ``t_s`` (s)."""
+        if not truth and not detections:  # most judged frames: nothing to count but the frame
+            self.frames += 1
+            self._end_passes(lamp_index, t_s)
+            return
         truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [self._index(d.cls, "detections.cls") for d in detections]
         det_target = [d.p_target >= self.target_threshold for d in detections]
         pairs: list[tuple[int, int]] = []
-        if truth and detections:  # most judged frames hold neither: nothing to match, no IoU to compute
+        if truth and detections:  # without both, nothing to match, no IoU to compute
             iou = iou_matrix([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections])
             pairs = greedy_match(iou, self.iou_threshold)
         self.frames += 1
@@ -171,6 +175,13 @@ class DetectionConfusion:
             p.last_seen_s = t_s
             p.fully_seen |= bool(t.fully_visible)
             p.detected |= c is not None and det_target[c]
+        self._end_passes(lamp_index, t_s)
+
+    def _end_passes(self, lamp_index: int, t_s: float) -> None:
+        """End lamp ``lamp_index``'s passes unseen for more than ``pass_gap_s`` at ``t_s``."""
+        passes = self._passes.get(lamp_index)
+        if not passes:
+            return
         for object_id in [i for i, p in passes.items() if t_s - p.last_seen_s > self.pass_gap_s]:
             self._end_pass(passes.pop(object_id))
 

@@ -5,14 +5,19 @@ The energy a controller spends on nobody (insects, branches, animals, lights lef
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from citysim.config.kinds import TARGET_KINDS
 from citysim.metrics.collector import Collector
 from citysim.world.agents import AgentState
 from citysim.world.street import Street
+
+#: The kinds ``AgentState.is_target`` is true of, as a set: asked of every agent every step.
+_TARGET_KINDS = frozenset(TARGET_KINDS)
 
 
 class FalseOnTime(Collector):
@@ -23,6 +28,10 @@ class FalseOnTime(Collector):
         # fast run's metrics
         self.starts_m = [s.zone_start_m for s in street.lamps]
         self.ends_m = [s.zone_end_m for s in street.lamps]
+        # zones in lamp order, each ending before the next starts (every street's): the zone a point
+        # is in is then the last one starting at or before it, found by bisection
+        bounds_m = [x for zone in zip(self.starts_m, self.ends_m, strict=True) for x in zone]
+        self._ordered = all(a <= b for a, b in zip(bounds_m[:-1], bounds_m[1:], strict=True))
         self.dim_level = dim_level
         self.dt_s = dt_s
         self.seconds = 0.0
@@ -36,10 +45,25 @@ class FalseOnTime(Collector):
             self._levels_seen = None if levels.flags.writeable else levels
         if not self._lit_lamps:  # nothing lit: nothing to add
             return
-        target_x_m = [a.x_m for a in agents if a.is_target]
-        starts, ends = self.starts_m, self.ends_m
-        unoccupied = sum(1 for j in self._lit_lamps if not any(starts[j] <= x < ends[j] for x in target_x_m))
+        target_x_m = [a.x_m for a in agents if a.cls in _TARGET_KINDS]
+        if not target_x_m:  # nobody to light for: every lit lamp is on for nobody
+            unoccupied = len(self._lit_lamps)
+        elif self._ordered:
+            occupied = self._occupied_zones(target_x_m)
+            unoccupied = sum(1 for j in self._lit_lamps if j not in occupied)
+        else:
+            starts, ends = self.starts_m, self.ends_m
+            unoccupied = sum(1 for j in self._lit_lamps if not any(starts[j] <= x < ends[j] for x in target_x_m))
         self.seconds += self.dt_s * float(unoccupied)
+
+    def _occupied_zones(self, x_m: list[float]) -> set[int]:
+        """The zones (ordered, ``self._ordered``) holding any of the points ``x_m``."""
+        occupied = set()
+        for x in x_m:
+            j = bisect.bisect_right(self.starts_m, x) - 1
+            if j >= 0 and x < self.ends_m[j]:
+                occupied.add(j)
+        return occupied
 
     def finish(self, t_end_s: float) -> dict[str, Any]:
         return {"false_on_time_s": self.seconds}

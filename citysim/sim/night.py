@@ -26,7 +26,7 @@ import numpy as np
 import simpy
 
 from citysim.config.scenario import Scenario
-from citysim.world.agents import AgentState
+from citysim.world.agents import AgentColumns, AgentState
 from citysim.world.physics import World
 from citysim.world.street import Street, build_street
 from citysim.world.traffic import start_traffic
@@ -46,6 +46,10 @@ class AgentSource(Protocol):
     spawned_count: int  # agents that had entered the street by the latest step
 
     def next_step(self) -> list[AgentState]: ...
+
+    def rows_of(self, agents: list[AgentState]) -> tuple[AgentColumns, int] | None:
+        """The recording's columns holding the latest step's ``agents`` and their first row (None:
+        ``agents`` is not that step's list)."""
 
 
 def seed_streams(seed: int) -> dict[str, np.random.Generator]:

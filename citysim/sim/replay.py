@@ -10,7 +10,9 @@ once and handing the snapshots to every controller gives them bit for bit the sa
 agent snapshots as chunk files of ``CHUNK_STEPS`` physics steps, each written whole and then
 renamed into place, so a reader in another process sees a chunk complete or not at all.
 ``TrafficReplay(folder)`` reads them back, in step order, waiting for a chunk the recorder has
-not written yet (the recorder runs beside the first controllers of a parallel comparison).
+not written yet (the recorder runs beside the first controllers of a parallel comparison);
+``rows_of`` gives the chunk's agents as columns too, for those who compute over every step of a
+chunk in one numpy pass (fast mode's candidates).
 
 A chunk holds compact arrays, not objects: per step the number of agents and the world's spawn
 count; per agent and step its object, position, heading, speed and gait phase (float64, as
@@ -31,7 +33,7 @@ import numpy as np
 
 from citysim.config.scenario import Scenario
 from citysim.sim.night import build_night
-from citysim.world.agents import AgentState, MemberState
+from citysim.world.agents import AgentColumns, AgentState, MemberState
 
 #: physics steps per chunk file (60 s at 30 Hz): small enough to stream, few enough files
 CHUNK_STEPS = 1800
@@ -39,6 +41,20 @@ CHUNK_STEPS = 1800
 DYNAMIC_COLUMNS = ("x_m", "y_m", "heading_rad", "speed_mps", "gait_phase_rad")
 _DONE = "done.pkl"
 _FAILED = "failed.txt"
+
+
+# AgentState's frozen-dataclass __init__ sets its 12 fields one object.__setattr__ at a time (about
+# twice the time of this way, measured): the replay builds each with all fields at once, the same
+# objects (as detector.detector builds its Detections; tests/citysim/sim/test_replay.py checks them)
+_new_object = object.__new__
+_set_attribute = object.__setattr__
+
+
+def _agent_state(fields: dict) -> AgentState:
+    """An AgentState of all its ``fields`` (name -> value, in field order), as ``AgentState(**fields)`` makes it."""
+    state = _new_object(AgentState)
+    _set_attribute(state, "__dict__", fields)
+    return state
 
 
 class TrafficError(RuntimeError):
@@ -167,6 +183,8 @@ class TrafficReplay:
         self._steps: list[tuple[int, int, int, int]] = []  # per step: first row, rows, first member phase, spawned
         self._step_in_chunk = 0
         self._chunk: dict | None = None
+        self._columns: AgentColumns | None = None  # the current chunk's, made on first ask
+        self._latest: tuple[list[AgentState], int] = ([], 0)  # the latest step's agents and first row
 
     def _load(self, index: int) -> None:
         path = self.folder / f"chunk_{index:06d}.pkl"
@@ -191,9 +209,10 @@ class TrafficReplay:
             steps.append((row, n, member, spawned))
             member += sum(len(self.looks[oid].members) for oid in objects[row : row + n])
             row += n
-        chunk["objects"], chunk["rows"] = objects, chunk["rows"].tolist()
+        chunk["objects"], chunk["row_array"], chunk["rows"] = objects, chunk["rows"], chunk["rows"].tolist()
         chunk["member_phases"] = chunk["member_phases"].tolist()
         self._chunk, self._steps, self._step_in_chunk, self._chunk_index = chunk, steps, 0, index
+        self._columns = None
 
     def next_step(self) -> list[AgentState]:
         """The agents after the next physics step (the world's ``states()`` then), bit for bit."""
@@ -202,7 +221,8 @@ class TrafficReplay:
         first, n, member, self.spawned_count = self._steps[self._step_in_chunk]
         self._step_in_chunk += 1
         if not n:  # an empty street, most steps of a quiet hour
-            return []
+            self._latest = ([], first)
+            return self._latest[0]
         chunk = self._chunk
         out = []
         for oid, (x, y, heading, speed, phase) in zip(
@@ -214,9 +234,28 @@ class TrafficReplay:
                 phases = chunk["member_phases"][member : member + len(looks.members)]
                 member += len(looks.members)
                 members = tuple(MemberState(*m, p) for m, p in zip(looks.members, phases, strict=True))
-            out.append(AgentState(oid, looks.cls, x, y, heading, speed, looks.length_m, looks.width_m,
-                                  looks.height_m, phase, members, looks.light_on))  # fmt: skip
+            out.append(_agent_state({"object_id": oid, "cls": looks.cls, "x_m": x, "y_m": y, "heading_rad": heading,
+                                     "speed_mps": speed, "length_m": looks.length_m, "width_m": looks.width_m,
+                                     "height_m": looks.height_m, "gait_phase_rad": phase, "members": members,
+                                     "light_on": looks.light_on}))  # fmt: skip
+        self._latest = (out, first)
         return out
+
+    def rows_of(self, agents: list[AgentState]) -> tuple[AgentColumns, int] | None:
+        """The current chunk's agents as columns and the first row of ``agents``, when ``agents`` is
+        the list the latest ``next_step`` gave (its agents are the ``len(agents)`` rows from there,
+        the same numbers); else None."""
+        latest, first = self._latest
+        if agents is not latest or self._chunk is None:
+            return None
+        if self._columns is None:
+            chunk = self._chunk
+            rows, looks = chunk["row_array"], [self.looks[oid] for oid in chunk["objects"]]
+            x_m, y_m, heading_rad, speed_mps = (np.ascontiguousarray(rows[:, DYNAMIC_COLUMNS.index(name)])
+                                                for name in ("x_m", "y_m", "heading_rad", "speed_mps"))
+            self._columns = AgentColumns(x_m, y_m, heading_rad, speed_mps, tuple(lk.cls for lk in looks),
+                                         np.array([lk.light_on for lk in looks], dtype=bool))  # fmt: skip
+        return self._columns, first
 
 
 def recorded_steps(folder: Path) -> int:

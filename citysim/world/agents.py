@@ -60,6 +60,20 @@ class AgentState:
 
 
 @dataclass(frozen=True)
+class AgentColumns:
+    """The agents of many steps as columns, one row per agent and step (``AgentState``'s fields of
+    the same names; contiguous arrays): what a numpy pass over a run of steps reads at once
+    (``citysim.sim.replay`` hands out a chunk of recorded steps so)."""
+
+    x_m: np.ndarray  # float64
+    y_m: np.ndarray
+    heading_rad: np.ndarray
+    speed_mps: np.ndarray
+    cls: tuple[str, ...]
+    light_on: np.ndarray  # bool
+
+
+@dataclass(frozen=True)
 class AgentTraits:
     """What one agent looks like and how fast it wants to go; no position.
 

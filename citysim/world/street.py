@@ -9,6 +9,7 @@ sidewalk positions are given by the y of their centre line.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -85,7 +86,8 @@ class Street:
         float, ...
     ] = ()  # where pedestrians prefer to cross (the renderer may mark them)
 
-    @property
+    # cached: a street never changes, and camera controllers ask for the camera's lamp at every trigger
+    @cached_property
     def cameras(self) -> tuple[CameraSite, ...]:
         """Every camera: first each pole's own (camera i on lamp i), then the backward ones in lamp order.
 
@@ -96,7 +98,7 @@ class Street:
         n = len(own)
         return tuple(own + [CameraSite(n + k, site.index, site.back_camera) for k, site in enumerate(back)])
 
-    @property
+    @cached_property
     def camera_lamps(self) -> tuple[int, ...]:
         """The lamp each camera (by camera index) hangs on."""
         return tuple(c.lamp for c in self.cameras)

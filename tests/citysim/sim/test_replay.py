@@ -60,6 +60,7 @@ def test_replayed_traffic_is_the_stepped_world_bit_for_bit(tmp_path, monkeypatch
     for (t_live, a_live, n_live), (t_rep, a_rep, n_rep) in zip(live, replayed, strict=True):
         assert t_live == t_rep and n_live == n_rep
         assert a_live == a_rep
+        assert [vars(a) for a in a_live] == [vars(a) for a in a_rep]  # the same fields, none more
 
 
 def test_a_reader_stops_on_a_failed_or_too_short_recording(tmp_path):

@@ -1,0 +1,104 @@
+"""What fast mode reads of one step's agents: their candidates, nearest lamps and p_hit cells.
+
+``StepGeometries.of(agents, rows)`` gives ``FastSensors`` a ``StepGeometry`` per sensed step: the
+``Candidates`` of ``citysim.fast.geometry``, the lamp nearest each agent along the street (whose
+level is the light at the agent) and, on first ask, every agent's p_hit cell for every camera.
+
+A live world's step is computed from its agents. Replayed traffic (``citysim.sim.replay``) hands
+out a chunk of recorded steps as columns (``AgentColumns``; ``rows`` says where the step's agents
+stand in them): then the whole chunk is computed in one numpy pass, once, and each step's rows
+are cut from it. Every value is elementwise (or a per-row search), the same operation on the same
+numbers, so a step's values are its own bit for bit; numpy's per-call cost on a step's few
+agents was most of fast mode's sensing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from citysim.fast.geometry import CameraGeometry, Candidates
+from citysim.fast.model import KINDS, cell_of
+from citysim.world.agents import AgentColumns, AgentState
+
+#: ``KINDS`` index of each kind's name
+_KIND_INDEX = {name: i for i, name in enumerate(KINDS)}
+
+
+def p_hit_cells(kinds: np.ndarray, cand: Candidates, speed_mps: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The p_hit cells of agents of ``KINDS`` indices ``kinds`` (A,) for every camera, less the
+    frame's light and background age: (kind (A,), distance bin (A, C), bearing bin (A, C), speed bin (A,))."""
+    cells = cell_of(kinds[:, None], cand.forward_m, cand.bearing_rad, np.zeros(1), np.zeros(1), speed_mps[:, None])
+    return cells[0][:, 0], cells[1], cells[2], cells[5][:, 0]
+
+
+class StepGeometry:
+    """One step's agents seen from every camera: ``cand``, ``nearest_lamp`` (A,) and ``cells``."""
+
+    def __init__(self, cand: Candidates, nearest_lamp: np.ndarray, cells_of: Callable[[], tuple[np.ndarray, ...]]):
+        self.cand = cand
+        self.nearest_lamp = nearest_lamp
+        self._cells_of = cells_of
+        self._cells: tuple[np.ndarray, ...] | None = None
+
+    @property
+    def cells(self) -> tuple[np.ndarray, ...]:
+        """``p_hit_cells`` of the step's agents, made on first ask (the threshold baselines never ask)."""
+        if self._cells is None:
+            self._cells = self._cells_of()
+        return self._cells
+
+
+def step_of_agents(geometry: CameraGeometry, agents: Sequence[AgentState]) -> StepGeometry:
+    """The ``StepGeometry`` of one step's ``agents``, computed from them."""
+
+    def cells() -> tuple[np.ndarray, ...]:
+        kinds = np.array([KINDS.index(a.cls) for a in agents], dtype=np.int64)
+        return p_hit_cells(kinds, cand, np.array([a.speed_mps for a in agents], dtype=np.float64))
+
+    cand = geometry.candidates(agents)
+    x_m = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
+    return StepGeometry(cand, geometry.nearest_lamp(x_m), cells)
+
+
+class ChunkGeometry:
+    """``StepGeometry`` of every row of a chunk of replayed steps, computed for all rows at once."""
+
+    def __init__(self, geometry: CameraGeometry, columns: AgentColumns):
+        self.columns = columns
+        xy = np.column_stack([columns.x_m, columns.y_m])
+        self.cand = geometry.candidates_at(xy, columns.light_on, columns.heading_rad)
+        self.nearest_lamp = geometry.nearest_lamp(columns.x_m)
+        self._cells: tuple[np.ndarray, ...] | None = None
+
+    def cells(self) -> tuple[np.ndarray, ...]:
+        """``p_hit_cells`` of every row, made on first ask."""
+        if self._cells is None:
+            kinds = np.array([_KIND_INDEX[cls] for cls in self.columns.cls], dtype=np.int64)
+            self._cells = p_hit_cells(kinds, self.cand, self.columns.speed_mps)
+        return self._cells
+
+    def step(self, first: int, n: int) -> StepGeometry:
+        """The step whose ``n`` agents are the rows from ``first``."""
+        rows = slice(first, first + n)
+        return StepGeometry(self.cand.rows(first, n), self.nearest_lamp[rows],
+                            lambda: tuple(cells[rows] for cells in self.cells()))  # fmt: skip
+
+
+class StepGeometries:
+    """The ``StepGeometry`` of each step asked for, from its chunk's one pass when it is replayed."""
+
+    def __init__(self, geometry: CameraGeometry):
+        self.geometry = geometry
+        self._chunk: ChunkGeometry | None = None
+
+    def of(self, agents: Sequence[AgentState], rows: tuple[AgentColumns, int] | None) -> StepGeometry:
+        """The geometry of ``agents``; ``rows``: the replayed chunk's columns and the first row of
+        ``agents`` in them (``TrafficReplay.rows_of``), None for agents of a live world."""
+        if rows is None:
+            return step_of_agents(self.geometry, agents)
+        columns, first = rows
+        if self._chunk is None or self._chunk.columns is not columns:
+            self._chunk = ChunkGeometry(self.geometry, columns)
+        return self._chunk.step(first, len(agents))
