@@ -19,12 +19,17 @@ USAGE_EXIT = 2
 _INVALID_CHOICE = re.compile(r"invalid choice: '(?P<given>[^']*)' \(choose from (?P<choices>.*)\)$")
 
 
+def nearest_names(name: str, valid: Sequence[str], n: int = 2) -> list[str]:
+    """Up to ``n`` of ``valid`` close enough to ``name`` to be what was meant, closest first."""
+    return difflib.get_close_matches(name, list(valid), n=n, cutoff=0.6)
+
+
 def did_you_mean(name: str, valid: Sequence[str]) -> str:
     """'; did you mean x?' for a near miss of one of ``valid``, else '; valid: a, b, c' (empty
     without names): what every bad-name message ends with."""
     if not valid:
         return ""
-    near = difflib.get_close_matches(name, list(valid), n=2, cutoff=0.6)
+    near = nearest_names(name, valid)
     if near:
         return f"; did you mean {' or '.join(near)}?"
     return f"; valid: {', '.join(valid)}"
@@ -61,7 +66,7 @@ class Parser(argparse.ArgumentParser):
         choice = _INVALID_CHOICE.search(message)
         if choice:  # argparse lists the choices; a near miss is worth naming (Python 3.14 does too)
             valid = [c.strip().strip("'") for c in choice["choices"].split(",")]
-            near = difflib.get_close_matches(choice["given"], valid, n=1, cutoff=0.6)
+            near = nearest_names(choice["given"], valid, n=1)
             if near:
                 message += f"; did you mean '{near[0]}'?"
         print(f"error: {message} (see {self.prog} --help)", file=sys.stderr)

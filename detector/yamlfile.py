@@ -6,7 +6,7 @@ from pathlib import Path
 
 import yaml
 
-from detector.cliargs import did_you_mean
+from detector.cliargs import nearest_names
 
 
 def read_yaml_mapping(path: str | Path, kind: str, error: type[Exception], holds: str = "fields") -> dict:
@@ -35,9 +35,5 @@ def _nearby_yaml(path: Path) -> str:
     folder = path.parent
     if not folder.is_dir():
         return ""
-    names = sorted(p.name for p in folder.iterdir() if p.suffix in (".yaml", ".yml"))
-    hint = did_you_mean(path.name, names)
-    if not hint.startswith("; did you mean"):
-        return ""
-    near = hint.removeprefix("; did you mean ").removesuffix("?").split(" or ")
-    return f"; did you mean {' or '.join(str(folder / n) for n in near)}?"
+    near = nearest_names(path.name, sorted(p.name for p in folder.iterdir() if p.suffix in (".yaml", ".yml")))
+    return f"; did you mean {' or '.join(str(folder / n) for n in near)}?" if near else ""

@@ -11,13 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from citysim.config.kinds import TARGET_KINDS
 from citysim.metrics.collector import Collector
 from citysim.world.agents import AgentState
 from citysim.world.street import Street
-
-#: The kinds ``AgentState.is_target`` is true of, as a set: asked of every agent every step.
-_TARGET_KINDS = frozenset(TARGET_KINDS)
 
 
 class FalseOnTime(Collector):
@@ -45,7 +41,7 @@ class FalseOnTime(Collector):
             self._levels_seen = None if levels.flags.writeable else levels
         if not self._lit_lamps:  # nothing lit: nothing to add
             return
-        target_x_m = [a.x_m for a in agents if a.cls in _TARGET_KINDS]
+        target_x_m = [a.x_m for a in agents if a.is_target]
         if not target_x_m:  # nobody to light for: every lit lamp is on for nobody
             unoccupied = len(self._lit_lamps)
         elif self._ordered:

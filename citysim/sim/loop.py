@@ -69,8 +69,8 @@ def controller_spec(scenario: Scenario, name: str) -> ControllerSpec:
 def check_controllers(names: list[str]) -> None:
     unknown = [n for n in names if n not in CONTROLLERS]
     if unknown:
-        names = ", ".join(map(repr, unknown))
-        raise RunError(f"controllers: unknown {names}{did_you_mean(unknown[0], list(CONTROLLERS))}")
+        listed = ", ".join(map(repr, unknown))
+        raise RunError(f"controllers: unknown {listed}{did_you_mean(unknown[0], list(CONTROLLERS))}")
 
 
 def build_controller(night: Night, spec: ControllerSpec, sensors: object | None = None) -> Controller:

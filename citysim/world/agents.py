@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from citysim.config.kinds import AGENT_KINDS, AgentKind, kind_of
+from citysim.config.kinds import TARGET_KINDS, AgentKind, kind_of
 from citysim.config.motion import DrawOptions
 
 
@@ -34,6 +34,10 @@ class MemberState:
     height_m: float
     length_m: float  # step length (Table 1 depth)
     gait_phase_rad: float
+
+
+#: ``TARGET_KINDS`` as a set
+_TARGET_KINDS = frozenset(TARGET_KINDS)
 
 
 @dataclass(frozen=True)
@@ -55,8 +59,8 @@ class AgentState:
 
     @property
     def is_target(self) -> bool:
-        kind = AGENT_KINDS.get(self.cls)
-        return kind is not None and kind.is_target
+        # a set look-up: asked of every agent every step (the zone and false-on-time counters)
+        return self.cls in _TARGET_KINDS
 
 
 @dataclass(frozen=True)
