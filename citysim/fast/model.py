@@ -31,8 +31,8 @@ whether the detector found each), it holds:
   region lasts (consecutive frames are nearly the same picture: a share over 5 % is still over 5 %
   in the next frame 96 % of the time). Fast mode keeps a frame's rank in its condition's samples
   with that probability, so big regions come in episodes, not as independent frames. Fitted on
-  the busy calibration nights only: a threshold baseline lights its lamp once something big moves,
-  so nobody walks the length of its view in the dark as on the quiet nights (lamps held dim).
+  calibration's region nights: each baseline switching its own lamps at the scenario's own
+  traffic (``citysim.fast.region_records``), not on the detector's busier nights.
 Saved as JSON (small tables and capped sample lists).
 """
 

@@ -154,7 +154,7 @@ class CalibrationRecorder(Collector):
         recorded = self.sensors.detectors_made[lamp_index]
         frame = int(round(t_s * self.fps))
         cand, light = self._candidates()
-        idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
+        idx, near_kind, near_forward_m = self.in_view(lamp_index)
         decided = {prefix: self._decided(lamp_index, idx, truth, targets)
                    for prefix, targets in self._targets(lamp_index, detections).items()}  # fmt: skip
         young = is_young(recorded.last_rate)
@@ -165,10 +165,6 @@ class CalibrationRecorder(Collector):
                    "speed_mps": agent.speed_mps, "light": light[a_i], "young": young}  # fmt: skip
             self._add_row({**row, **_decision_values(decided, agent.object_id)})
         self._beam_rows(lamp_index, frame, cand, young, decided)
-        beams = np.flatnonzero(cand.beam_seen[:, lamp_index]) if len(self.agents) else idx
-        near_kind, near_forward_m = nearest_in_view(np.array([KINDS.index(self.agents[j].cls) for j in idx.tolist()]),
-                                                    cand.forward_m[idx, lamp_index],
-                                                    cand.beam_forward_m[beams, lamp_index])  # fmt: skip
         values = {"camera": lamp_index, "frame": frame, "light": float(self.levels[lamp_index]),
                   "has_candidates": len(idx) > 0, "regions": len(recorded.inner.last_regions) > 0,
                   "near_kind": near_kind, "near_forward_m": near_forward_m,
@@ -179,6 +175,15 @@ class CalibrationRecorder(Collector):
                               strict=True))  # fmt: skip
         for col in FRAME_COLUMNS:
             self.frames[col].append(values[col])
+
+    def in_view(self, lamp_index: int) -> tuple[np.ndarray, int, float]:
+        """Camera ``lamp_index``'s candidates this frame (indices into the step's agents) and the
+        subject of its threshold condition (``nearest_in_view``: KINDS index, forward m)."""
+        cand, _ = self._candidates()
+        idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
+        beams = np.flatnonzero(cand.beam_seen[:, lamp_index]) if len(self.agents) else idx
+        kinds = np.array([KINDS.index(self.agents[j].cls) for j in idx.tolist()])
+        return (idx, *nearest_in_view(kinds, cand.forward_m[idx, lamp_index], cand.beam_forward_m[beams, lamp_index]))
 
     def _targets(self, lamp_index: int, detections: Sequence) -> dict[str, list]:
         """This frame's target detections under each decision set (``DECISION_PREFIXES``)."""

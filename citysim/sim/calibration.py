@@ -10,17 +10,22 @@ else the one shipped in the repository (``SHIPPED_DIR``, same name and key, so `
 fresh clone need no calibration), else calibrates. A shipped model is data, never refitted;
 ``tests/citysim/fast/test_shipped_models.py`` fails as soon as its key no longer matches its scenario.
 
-Two kinds of nights, ``runs`` of each, ``duration_s`` long, at ``TRAFFIC_FACTOR`` times the
-scenario's target traffic (more people per rendered frame):
+Three kinds of nights, ``runs`` of each (``calibration_nights``), ``duration_s`` long:
 
-* busy nights (seeds ``CALIBRATION_SEED_BASE + i``): the calibration controller lights the lamps
+* busy nights (seeds ``CALIBRATION_SEED_BASE + i``), at ``TRAFFIC_FACTOR`` times the scenario's
+  target traffic (more people per rendered frame): the calibration controller lights the lamps
   as it would; with that much traffic nearly everyone is seen under lit lamps;
 * quiet nights (seeds ``QUIET_SEED_BASE + i``): the same, but every lamp is held dim
   (``run_controller(lamps_held_dim=True)``). In the quiet hours, where adaptive lighting earns
   most, people arrive under dim lamps, and busy nights hardly show that: with busy nights alone
   (model v14) calibration saw 4 cars coming toward a camera under dim lamps, fast mode's
   ``detector_located`` lit 68 % of zone entries on entry at 02:00 (seed 2) where full fidelity
-  lit 95.5 %, and with quiet nights added 95.5 % (README, "Fast mode").
+  lit 95.5 %, and with quiet nights added 95.5 % (README, "Fast mode");
+* region nights (seeds ``REGION_SEED_BASE + i``), one per threshold baseline and seed, at the
+  scenario's own traffic, the lamps switched by that baseline: the threshold baselines' region
+  sizes come from these alone (``citysim.fast.region_records`` says why).
+
+The detector's tables and false alarms come from the busy and quiet nights.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ import json
 import multiprocessing as mp
 import queue
 from pathlib import Path
+from typing import NamedTuple
 
 from tqdm import tqdm
 
@@ -39,21 +45,41 @@ from citysim.config.scenario import ControllerSpec, Scenario, override
 from citysim.fast.geometry import CameraGeometry
 from citysim.fast.model import MODEL_VERSION, SensorModel, fit_sensor_model
 from citysim.fast.records import CalibrationRecorder, RecordingSensors, merge_columns
+from citysim.fast.region_records import RegionRecorder, RegionSensors
 from citysim.sim.loop import run_controller
 from citysim.sim.workers import spawn_pool
 from citysim.world.street import build_street
 
 CALIBRATION_CONTROLLER = "detector_confirmed"
+#: The threshold baselines whose region sizes fast mode draws: each drives region nights of its own.
+THRESHOLD_CONTROLLERS = ("threshold_05", "threshold_5")
 #: Calibration's busy nights use seeds CALIBRATION_SEED_BASE + i, its quiet nights (every lamp
-#: held dim) QUIET_SEED_BASE + i: far from any scenario's own seed.
+#: held dim) QUIET_SEED_BASE + i, its region nights REGION_SEED_BASE + i: far from any scenario's seed.
 CALIBRATION_SEED_BASE = 900_000_000
 QUIET_SEED_BASE = CALIBRATION_SEED_BASE + 100
+REGION_SEED_BASE = CALIBRATION_SEED_BASE + 300
 DEFAULT_DURATION_S = 120.0
 DEFAULT_RUNS = 2
-#: Calibration nights carry this many times the scenario's target traffic: more candidates per
+#: Busy and quiet nights carry this many times the scenario's target traffic: more candidates per
 #: rendered frame (a rendered second costs the same with 3 people in view as with 1). It crowds
-#: the street a little more than the scenario does; validation is where that would show.
+#: the street a little more than the scenario does; validation is where that would show (it did
+#: for the threshold baselines' region sizes, which therefore have region nights at 1x).
 TRAFFIC_FACTOR = 3.0
+
+
+class CalibrationNight(NamedTuple):
+    """One calibration night: its seed, the controller switching its lamps, its traffic (times the
+    scenario's target traffic) and whether every lamp is held dim."""
+
+    seed: int
+    controller: str
+    traffic_factor: float
+    lamps_held_dim: bool
+
+    @property
+    def records_regions(self) -> bool:
+        """A region night: a threshold baseline's largest regions, not the detector's candidates."""
+        return self.controller in THRESHOLD_CONTROLLERS
 
 
 def default_cache_dir() -> Path:
@@ -65,9 +91,14 @@ def default_cache_dir() -> Path:
 SHIPPED_DIR = Path(__file__).resolve().parents[2] / "scenarios" / "sensor_models"
 
 
-def calibration_seeds(runs: int) -> list[tuple[int, bool]]:
-    """(seed, lamps held dim) of each calibration night: ``runs`` busy nights, then ``runs`` quiet ones."""
-    return [(CALIBRATION_SEED_BASE + i, False) for i in range(runs)] + [(QUIET_SEED_BASE + i, True) for i in range(runs)]
+def calibration_nights(runs: int) -> list[CalibrationNight]:
+    """Every calibration night, in order: ``runs`` busy nights, ``runs`` quiet ones, then ``runs``
+    region nights per threshold baseline (the same seeds for each: the same traffic, its own lamps)."""
+    busy = [CalibrationNight(CALIBRATION_SEED_BASE + i, CALIBRATION_CONTROLLER, TRAFFIC_FACTOR, False) for i in range(runs)]
+    quiet = [CalibrationNight(QUIET_SEED_BASE + i, CALIBRATION_CONTROLLER, TRAFFIC_FACTOR, True) for i in range(runs)]
+    regions = [CalibrationNight(REGION_SEED_BASE + i, name, 1.0, False) for name in THRESHOLD_CONTROLLERS
+               for i in range(runs)]  # fmt: skip
+    return busy + quiet + regions
 
 
 def general_model_path() -> Path:
@@ -90,8 +121,8 @@ def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
         "idle_frame_stride": scenario.simulation.idle_frame_stride,
         "kinds": sorted(scenario.traffic.reported_kinds()),
         "detector_model_sha256": hashlib.sha256(general_model_path().read_bytes()).hexdigest(),
-        "calibration": {"duration_s": duration_s, "runs": runs, "controller": CALIBRATION_CONTROLLER,
-                        "nights": calibration_seeds(runs), "region_sizes_from": "busy nights"},
+        "calibration": {"duration_s": duration_s, "runs": runs, "nights": calibration_nights(runs),
+                        "region_sizes_from": "region nights"},
     }
     return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
@@ -101,42 +132,48 @@ def model_path(scenario: Scenario, cache_dir: Path | None, duration_s: float, ru
     return folder / f"{scenario.name}-{calibration_key(scenario, duration_s, runs)}.json"
 
 
-def calibration_scenario(scenario: Scenario, seed: int, duration_s: float) -> Scenario:
-    """The scenario on a calibration seed, ``TRAFFIC_FACTOR`` times its target traffic."""
+def calibration_scenario(scenario: Scenario, seed: int, duration_s: float, traffic_factor: float = TRAFFIC_FACTOR) -> Scenario:
+    """The scenario on a calibration seed, ``traffic_factor`` times its target traffic."""
     classes = scenario.traffic.classes
-    updates = {f"traffic.classes.{kind}.rate_per_hour": getattr(classes, kind).rate_per_hour * TRAFFIC_FACTOR
+    updates = {f"traffic.classes.{kind}.rate_per_hour": getattr(classes, kind).rate_per_hour * traffic_factor
                for kind in TARGET_KINDS}  # fmt: skip
     return override(scenario, {"seed": seed, "duration_s": duration_s, **updates})
 
 
-def record_run(scenario: Scenario, seed: int, duration_s: float, on_progress=None, lamps_held_dim: bool = False):
-    """One full-fidelity calibration night: its candidate rows and judged-frame rows."""
-    night_scenario = calibration_scenario(scenario, seed, duration_s)
+def record_run(scenario: Scenario, night: CalibrationNight, duration_s: float, on_progress=None) -> tuple:
+    """One full-fidelity calibration night: (candidate rows, judged-frame rows); a region night has
+    no candidate rows (None) and frame rows of ``citysim.fast.region_records.REGION_COLUMNS``."""
+    night_scenario = calibration_scenario(scenario, night.seed, duration_s, night.traffic_factor)
     street = build_street(night_scenario)
-    sensors = RecordingSensors()
-    recorder = CalibrationRecorder(CameraGeometry(street), sensors, street.lamps[0].camera.fps)
-    run_controller(night_scenario, ControllerSpec(name=CALIBRATION_CONTROLLER), sensors=sensors,
-                   observers=[recorder], on_progress=on_progress, lamps_held_dim=lamps_held_dim)  # fmt: skip
-    return recorder.columns()
+    fps = street.lamps[0].camera.fps
+    if night.records_regions:
+        sensors = RegionSensors()
+        recorder = RegionRecorder(CameraGeometry(street), sensors, fps)
+    else:
+        sensors = RecordingSensors()
+        recorder = CalibrationRecorder(CameraGeometry(street), sensors, fps)
+    run_controller(night_scenario, ControllerSpec(name=night.controller), sensors=sensors, observers=[recorder],
+                   on_progress=on_progress, lamps_held_dim=night.lamps_held_dim)  # fmt: skip
+    return (None, recorder.region_columns()) if night.records_regions else recorder.columns()
 
 
 def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: float = DEFAULT_DURATION_S,
               runs: int = DEFAULT_RUNS, progress: bool = True, workers: int = 2) -> tuple[SensorModel, Path]:  # fmt: skip
-    """Render-and-detect ``runs`` calibration nights, fit the sensor model, cache it; (model, path)."""
+    """Render-and-detect the calibration nights, fit the sensor model, cache it; (model, path)."""
     path = model_path(scenario, cache_dir, duration_s, runs)
-    bar = tqdm(total=duration_s * 2 * runs, unit="sim s", desc=f"calibrating {scenario.name} (full fidelity)",
+    nights = calibration_nights(runs)
+    bar = tqdm(total=duration_s * len(nights), unit="sim s", desc=f"calibrating {scenario.name} (full fidelity)",
                disable=not progress, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]")
-    parts = _record_runs(scenario, duration_s, runs, workers, bar)
+    parts = _record_runs(scenario, nights, duration_s, workers, bar)
     bar.close()
-    rows = merge_columns([p[0] for p in parts])
-    frames = merge_columns([p[1] for p in parts])
-    busy_frames = merge_columns([p[1] for p, (_, held_dim) in zip(parts, calibration_seeds(runs), strict=True)
-                                 if not held_dim])  # fmt: skip
-    camera_hours = duration_s * len(parts) * len(build_street(scenario).lamps) / 3600.0
-    # the threshold baselines' region sizes from the busy nights: such a baseline lights its lamp as
-    # soon as something big moves, so nobody crosses its view in the dark as on the quiet nights
+    detector_parts = [part for part, night in zip(parts, nights, strict=True) if not night.records_regions]
+    rows = merge_columns([rows for rows, _ in detector_parts])
+    frames = merge_columns([frames for _, frames in detector_parts])
+    region_frames = merge_columns([frames for (_, frames), night in zip(parts, nights, strict=True)
+                                   if night.records_regions])  # fmt: skip
+    camera_hours = duration_s * len(detector_parts) * len(build_street(scenario).lamps) / 3600.0
     model = fit_sensor_model(rows, frames, camera_hours, key=path.stem,
-                             idle_frame_stride=scenario.simulation.idle_frame_stride, area_frames=busy_frames)
+                             idle_frame_stride=scenario.simulation.idle_frame_stride, area_frames=region_frames)
     model.save(path)
     return model, path
 
@@ -156,21 +193,18 @@ def sensor_model_for(scenario: Scenario, cache_dir: Path | None = None, *, durat
 
 
 def _record_worker(args):
-    scenario, (seed, held_dim), duration_s, progress_queue = args
-    return record_run(scenario, seed, duration_s, on_progress=progress_queue.put if progress_queue else None,
-                      lamps_held_dim=held_dim)  # fmt: skip
+    scenario, night, duration_s, progress_queue = args
+    return record_run(scenario, night, duration_s, on_progress=progress_queue.put if progress_queue else None)
 
 
-def _record_runs(scenario: Scenario, duration_s: float, runs: int, workers: int, bar) -> list:
-    """The calibration nights, in parallel processes when ``workers`` > 1 (results in seed order)."""
-    seeds = calibration_seeds(runs)
+def _record_runs(scenario: Scenario, nights: list[CalibrationNight], duration_s: float, workers: int, bar) -> list:
+    """The calibration nights, in parallel processes when ``workers`` > 1 (results in the nights' order)."""
     if workers <= 1:
-        return [record_run(scenario, seed, duration_s, on_progress=bar.update, lamps_held_dim=held_dim)
-                for seed, held_dim in seeds]  # fmt: skip
+        return [record_run(scenario, night, duration_s, on_progress=bar.update) for night in nights]
     with mp.Manager() as manager:
         q = manager.Queue()
-        with spawn_pool(min(workers, len(seeds))) as pool:
-            futures = [pool.submit(_record_worker, (scenario, seed, duration_s, q)) for seed in seeds]
+        with spawn_pool(min(workers, len(nights))) as pool:
+            futures = [pool.submit(_record_worker, (scenario, night, duration_s, q)) for night in nights]
             while not all(f.done() for f in futures):
                 try:
                     bar.update(q.get(timeout=0.2))

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from citysim.config.scenario import Scenario, override
-from citysim.sim.calibration import CALIBRATION_SEED_BASE, calibration_seeds, sensor_model_for
+from citysim.sim.calibration import CALIBRATION_SEED_BASE, calibration_nights, sensor_model_for
 from citysim.sim.compare import run_comparison
 from citysim.sim.loop import RunError
 
@@ -61,7 +61,7 @@ FIGURES = (
 
 def validation_seeds(scenario: Scenario, count: int) -> list[int]:
     seeds = [scenario.seed + i for i in range(count)]
-    clash = sorted(set(seeds) & {seed for seed, _ in calibration_seeds(64)})
+    clash = sorted(set(seeds) & {night.seed for night in calibration_nights(64)})
     if clash:
         raise RunError(f"seed: {clash[0]} is a calibration seed; pick a scenario seed below {CALIBRATION_SEED_BASE}")
     return seeds

@@ -28,7 +28,7 @@ def scenario():
 
 @pytest.mark.slow
 def test_a_short_full_fidelity_night_gives_candidate_and_frame_rows(scenario):
-    rows, frames = record_run(scenario, calibration.calibration_seeds(1)[0][0], 6.0)
+    rows, frames = record_run(scenario, calibration.calibration_nights(1)[0], 6.0)
     n = len(rows["hit"])
     assert n > 0 and all(len(v) == n for v in rows.values())
     assert len(frames["camera"]) >= 6 * 3  # every camera judged at least once a second
@@ -44,19 +44,49 @@ def test_a_short_full_fidelity_night_gives_candidate_and_frame_rows(scenario):
 def test_a_quiet_night_sees_everyone_under_dim_lamps_where_a_busy_one_lights_them(scenario):
     from citysim.fast.model import LIT_LEVEL
 
-    seed = calibration.calibration_seeds(1)[0][0]
-    busy, _ = record_run(scenario, seed, 6.0)
-    quiet, quiet_frames = record_run(scenario, seed, 6.0, lamps_held_dim=True)
+    busy_night, quiet_night = calibration.calibration_nights(1)[:2]
+    busy, _ = record_run(scenario, busy_night, 6.0)
+    quiet, quiet_frames = record_run(scenario, quiet_night._replace(seed=busy_night.seed), 6.0)
     assert (busy["light"] >= LIT_LEVEL).any()  # the controller lit lamps for the people it saw
     assert len(quiet["hit"]) > 0 and len(quiet_frames["camera"]) > 0
     assert (quiet["light"] < LIT_LEVEL).all() and (quiet_frames["light"] < LIT_LEVEL).all()
     assert not (quiet["young"] & (quiet["frame"] > 15)).any()  # no lamp switched: no background rebuilt
 
 
-def test_calibration_nights_are_busy_then_quiet_on_seeds_of_their_own():
-    nights = calibration.calibration_seeds(2)
-    assert [held for _, held in nights] == [False, False, True, True]
-    assert len({seed for seed, _ in nights}) == 4
+@pytest.mark.slow
+def test_a_region_night_records_its_threshold_baselines_own_largest_regions(scenario):
+    from citysim.fast.model import LIT_LEVEL, threshold_conditions
+    from citysim.fast.region_records import REGION_COLUMNS
+
+    night = next(n for n in calibration.calibration_nights(1) if n.controller == "threshold_05")
+    # at the scenario's own traffic (a walker every 6 s), its 20 s bring people close to a camera
+    rows, frames = record_run(scenario, night, 20.0)
+    assert rows is None and set(frames) == set(REGION_COLUMNS)
+    n = len(frames["camera"])
+    assert n >= 20 * 3 and all(len(v) == n for v in frames.values())  # every camera judged at least once a second
+    assert ((frames["area_fraction"] >= 0) & (frames["area_fraction"] <= 1)).all()
+    assert (frames["near_kind"] >= 0).any() and (frames["area_fraction"] > 0).any()  # people in view
+    # threshold_05 lit a lamp for a region over 0.5 % of the frame: the frames after it show it lit
+    assert (frames["area_fraction"] > 0.005).any() and (frames["light"] >= LIT_LEVEL).any()
+    # every row has a condition the fit files it under
+    assert all(threshold_conditions(int(k), float(d), bool(lit >= LIT_LEVEL), int(a), far)
+               for k, d, lit, a, far in zip(frames["near_kind"], frames["near_forward_m"], frames["light"],
+                                            frames["age_bin"], frames["far_change_s"], strict=True))  # fmt: skip
+
+
+def test_calibration_nights_are_busy_quiet_then_each_baselines_region_nights_on_seeds_of_their_own():
+    nights = calibration.calibration_nights(2)
+    assert [(n.controller, n.lamps_held_dim) for n in nights] == [
+        ("detector_confirmed", False), ("detector_confirmed", False), ("detector_confirmed", True),
+        ("detector_confirmed", True), ("threshold_05", False), ("threshold_05", False),
+        ("threshold_5", False), ("threshold_5", False)]  # fmt: skip
+    assert [n.records_regions for n in nights] == [False] * 4 + [True] * 4
+    # the detector's nights are busier than the scenario; the region nights are at its own traffic
+    assert [n.traffic_factor for n in nights] == [calibration.TRAFFIC_FACTOR] * 4 + [1.0] * 4
+    assert len({n.seed for n in nights[:4]}) == 4  # busy and quiet on seeds of their own
+    assert {n.seed for n in nights[4:]}.isdisjoint({n.seed for n in nights[:4]})
+    # the two baselines see the same traffic, each switching its own lamps
+    assert [n.seed for n in nights[4:6]] == [n.seed for n in nights[6:]]
 
 
 def test_the_cache_key_hashes_the_detector_model_the_detector_loads():

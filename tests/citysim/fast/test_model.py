@@ -157,11 +157,15 @@ def test_no_judged_frames_is_an_error_naming_calibration():
 
 
 def test_region_sizes_come_from_the_frames_given_for_them_and_false_alarms_from_all():
-    # calibration gives its busy nights' frames for the threshold baselines' region sizes
+    # calibration gives its region nights' frames (only the columns a region night records) for
+    # the threshold baselines' region sizes, and its detector nights' frames for the rest
+    from citysim.fast.region_records import REGION_COLUMNS
+
     busy = frames(4, area_fraction=[0.0, 0.01, 0.0, 0.01])
     quiet = frames(4, area_fraction=[0.2, 0.3, 0.2, 0.3], fa=[True, False, False, False])
     both = {col: np.concatenate([busy[col], quiet[col]]) for col in busy}
-    model = fit_sensor_model(rows(0), both, camera_hours=1.0, area_frames=busy)
+    region_night = {col: busy[col] for col in REGION_COLUMNS}
+    model = fit_sensor_model(rows(0), both, camera_hours=1.0, area_frames=region_night)
     assert model.area_fraction["none/dim"] == [0.0, 0.01, 0.0, 0.01]
     assert model.fa_start_p[0] > 0  # the quiet night's false alarm still counts
     assert fit_sensor_model(rows(0), both, camera_hours=1.0).area_fraction["none/dim"] == list(both["area_fraction"])
