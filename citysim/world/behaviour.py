@@ -1,7 +1,7 @@
 """How agents decide their motion, each physics step, over all agents at once.
 
-``move_agents`` reads every agent's pose and route, decides its next move and moves it as a
-kinematic body (velocity and angular velocity, integrated over the step):
+``move_agents`` reads every agent's pose and route and decides its next move, as the velocity
+and angular velocity its pymunk kinematic body is given for the step (``citysim.world.bodies``):
 
 * longitudinal: the Intelligent Driver Model (Treiber, Hennecke & Helbing
   2000) toward the desired speed, with the nearest agent ahead in the corridor
@@ -67,8 +67,9 @@ __all__ = [
 
 
 def move_agents(state: np.ndarray, vu: np.ndarray, dt: float, t_s: float, work: np.ndarray | None = None) -> int:
-    """Decide every agent's move for the next ``dt`` seconds and make it (``citysim.world.rows``'
-    arrays, updated in place): pose, velocity, speed, lateral target, waiting flag.
+    """Decide every agent's move for the next ``dt`` seconds (``citysim.world.rows``' arrays,
+    updated in place): velocity and angular velocity (for its body to integrate), speed, lateral
+    target, waiting flag.
 
     Returns the number of moves the last-resort overlap check dropped. ``work``: an array
     (``moves_compiled.N_WORK``, N) to leave the step's plan and proposed poses in (tests)."""

@@ -1,9 +1,10 @@
 """Moving the agents, compiled (numba): the inputs numpy turns into cosines and powers, the
-proposed poses, the integration of the agreed moves, and what changes with the distance walked.
+proposed poses, the velocities that make the agreed moves, the exchange with the pymunk bodies,
+and what changes with the distance walked.
 
-Each agent is a kinematic body: it follows the velocity and angular velocity the behaviour gives
-it exactly, integrated as Chipmunk (pymunk) integrates a kinematic body, ``p + (v + 0) * dt``
-and ``a + (w + 0) * dt`` (the zero is its bias velocity; tests check the two agree bit for bit).
+Each agent is a pymunk kinematic body (``citysim.world.bodies``): ``commit`` sets the velocity
+and angular velocity that carry it to its agreed pose over the step, ``Space.step`` integrates
+them (``p + v dt``, ``a + w dt``), and ``from_bodies`` reads the poses back into the rows.
 The same floating-point operations in the same order as the numpy statement of the rules this
 replaced; arctan2 and the overlap check's geometry stay in numpy. Compiled once and cached on
 disk (``cache=True``); no parallelism, no fast-math.
@@ -32,6 +33,7 @@ from citysim.world.conflicts_compiled import needs_speeds
 from citysim.world.rows import (
     HEADING,
     LEG_LEN,
+    OMEGA,
     PAUSE,
     PHASE,
     REACH,
@@ -115,26 +117,44 @@ def propose(state, vu, work, dt):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def commit(state, vu, work, dt):  # pragma: no cover - compiled
-    """Hand the agreed moves to the bodies and integrate them over ``dt``; the number of moves the
-    overlap check cancelled. Sets each agent's velocity, speed, lateral target and waiting flag."""
+    """The velocities that make the agreed moves over ``dt`` (``VEL``, ``OMEGA``: for the bodies to
+    integrate); the number of moves the overlap check cancelled. Sets each agent's velocity,
+    angular velocity, speed, lateral target and waiting flag; its pose is left to its body."""
     blocked = 0
     for i in range(state.shape[0]):
         stage = work[STAGE, i]
         if stage == 3:
             blocked += 1
         ds = work[DS, i] if stage < 3 else 0.0
-        vx = (work[NEW_X, i] - state[i, X]) / dt
-        vy = (work[NEW_Y, i] - state[i, Y]) / dt
-        omega = wrap_angle(work[NEW_TH, i] - state[i, TH]) / dt
-        vu[VEL, i, 0], vu[VEL, i, 1] = vx, vy
+        vu[VEL, i, 0] = (work[NEW_X, i] - state[i, X]) / dt
+        vu[VEL, i, 1] = (work[NEW_Y, i] - state[i, Y]) / dt
+        state[i, OMEGA] = wrap_angle(work[NEW_TH, i] - state[i, TH]) / dt
         state[i, SPEED] = ds / dt
         state[i, TARGET] = work[NEW_TARGET, i]
         state[i, WAITING] = 1.0 if work[WAIT, i] != 0 else 0.0
-        # a kinematic body's step, as Chipmunk takes it (the zeros are its bias velocities)
-        state[i, X] = state[i, X] + (vx + 0.0) * dt
-        state[i, Y] = state[i, Y] + (vy + 0.0) * dt
-        state[i, TH] = state[i, TH] + (omega + 0.0) * dt
     return blocked
+
+
+@njit(cache=True)
+def to_bodies(state, vu, rows, out):  # pragma: no cover - compiled
+    """The bodies' velocities and angular velocities in the space's order, for ``pymunk.batch``:
+    ``out[3 k : 3 k + 3]`` = (vx, vy, omega) of row ``rows[k]``."""
+    for k in range(rows.shape[0]):
+        i = rows[k]
+        out[3 * k] = vu[VEL, i, 0]
+        out[3 * k + 1] = vu[VEL, i, 1]
+        out[3 * k + 2] = state[i, OMEGA]
+
+
+@njit(cache=True)
+def from_bodies(poses, rows, state):  # pragma: no cover - compiled
+    """The bodies' poses, in the space's order as ``pymunk.batch`` gives them (x, y, angle of each),
+    into their rows ``rows[k]``."""
+    for k in range(rows.shape[0]):
+        i = rows[k]
+        state[i, X] = poses[3 * k]
+        state[i, Y] = poses[3 * k + 1]
+        state[i, TH] = poses[3 * k + 2]
 
 
 @njit(cache=True)

@@ -1,18 +1,18 @@
-"""The moving world: agents as kinematic bodies following their routes without overlapping.
+"""The moving world: agents as pymunk bodies following their routes without overlapping.
 
-Every agent is a *kinematic* body with a box footprint: its motion is prescribed by the
-behaviour model (``citysim.world.behaviour``: path following, car following, giving way), so it
-follows the velocity it is given exactly, is never shoved off its sidewalk or lane, and overlaps
-are prevented before they happen instead of resolved after. Each step the behaviour sets every
-body's velocity and angular velocity and integrates the poses as Chipmunk (pymunk) integrates a
-kinematic body, bit for bit (the world once held pymunk bodies, which did nothing else: kinematic
-bodies never collide). The agents' state lives in arrays, one row per agent in order of entry
-(``citysim.world.rows``), which the compiled step reads and updates.
+Every agent is a *kinematic* pymunk body carrying a box shape (its ground footprint) in the
+world's ``space`` (``citysim.world.bodies``): its motion is prescribed by the behaviour model
+(``citysim.world.behaviour``: path following, car following, giving way), so it follows the
+velocity it is given exactly, is never shoved off its sidewalk or lane, and overlaps are prevented
+before they happen instead of resolved after. Each step the behaviour, compiled (numba), decides
+every agent's move from arrays of the agents' state, one row per agent in order of entry
+(``citysim.world.rows``); the moves are handed to the bodies as velocity and angular velocity,
+``Space.step`` integrates the poses, and the rows read them back.
 
 Agents are spawned into per-entry queues and enter when their entry is free;
-they leave at the street ends (or at the end of their route) and their rows are
-dropped, so memory stays flat. Same street, same spawns, same rng ->
-the same trajectories, bit for bit.
+they leave at the street ends (or at the end of their route) and are removed
+from the space (and their rows dropped), so memory stays flat. Same street, same spawns, same
+rng -> the same trajectories, bit for bit.
 
 Conventions: world frame of DESIGN.md, metres, seconds, m/s; angles rad CCW from +x.
 """
@@ -28,6 +28,7 @@ import numpy as np
 
 from citysim.config.kinds import AGENT_KINDS
 from citysim.world.agents import AgentState, AgentTraits, MemberState
+from citysim.world.bodies import Bodies
 from citysim.world.geometry import Leg, Route, oriented_overlaps
 from citysim.world.rows import (
     LENGTH,
@@ -70,6 +71,8 @@ class World:
         self.street = street
         self.rng = rng
         self.t_s = 0.0
+        self._bodies = Bodies()  # one pymunk kinematic body per agent, in the rows' order
+        self.space = self._bodies.space
         self._agents: dict[int, Mover] = {}
         self._movers: list[Mover] = []  # the same, in order of entry: the rows' order
         self._state = np.zeros((0, N_COLUMNS))  # one row per agent, in order of entry (rows.py)
@@ -110,6 +113,8 @@ class World:
         if self._movers:
             move_agents, _ = _compiled()
             self.blocked_moves += move_agents(self._state, self._vu, dt_s, self.t_s)
+        self._bodies.step(self._state, self._vu, dt_s)  # the space integrates the moves
+        if self._movers:
             self._advance_routes(dt_s)
         self.t_s += dt_s
 
@@ -163,6 +168,7 @@ class World:
             if not queue:
                 del self._pending[key]
             agent = Mover(oid, traits, route.legs)
+            self._bodies.add((x, y, heading), traits.length_m, traits.width_m)
             row, vu = new_row(agent, (x, y, heading), speed)
             self._state = np.concatenate([self._state, row])
             self._vu = np.concatenate([self._vu, vu], axis=1)
@@ -200,6 +206,7 @@ class World:
                 if self.rng.random() < dt / pauses.every_s:
                     self._state[i, PAUSE] = self.t_s + float(self.rng.uniform(*pauses.duration_s))
         if gone:
+            self._bodies.remove(gone)
             self._state = np.delete(self._state, gone, axis=0)
             self._vu = np.delete(self._vu, gone, axis=1)
             for i in gone:

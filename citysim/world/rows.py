@@ -3,8 +3,10 @@
 ``World`` keeps every agent's pose, motion state, looks and current (and next) leg in one float64
 array of ``N_COLUMNS`` columns (flags as 0.0 / 1.0), and its velocity and leg direction in a
 ``(2, N, 2)`` array (``VEL``, ``UNIT``; each ``(N, 2)`` half C-contiguous, as the matrix product of
-the behaviour wants them). ``Mover`` keeps what the compiled step never reads: the agent's id,
-traits, route and group members' gait phases.
+the behaviour wants them). The pose is the agent's pymunk body's, read back after every step
+(``citysim.world.bodies``); ``VEL`` and ``OMEGA`` are the velocity and angular velocity handed to
+it. ``Mover`` keeps what the compiled step never reads: the agent's id, traits, route and group
+members' gait phases.
 
 Conventions: world frame of DESIGN.md, metres, seconds, m/s; angles rad CCW from +x; leg offsets
 metres to the left of the leg direction (``citysim.world.geometry``).
@@ -36,7 +38,9 @@ ACC, B_COMF, B_MAX, HEADWAY, S0, LOOK, V_LAT, MARGIN, HORIZON, YAW, TILT = range
 HEADING, SX, SY, EX, EY, LEG_LEN, BAND_LO, BAND_HI, COMF_LO, COMF_HI, PREF, YIELD = range(26, 38)
 # the next leg when it crosses the road (walkers wait at this leg's end): flag, start, end, length
 NEXT_YIELD, NSX, NSY, NEX, NEY, NLEN = range(38, 44)
-N_COLUMNS = 44
+#: the angular velocity its body was given for the step, rad/s
+OMEGA = 44
+N_COLUMNS = 45
 #: halves of the (2, N, 2) array: velocity (m/s) and leg direction (unit vector)
 VEL, UNIT = 0, 1
 

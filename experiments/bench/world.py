@@ -26,7 +26,8 @@ from experiments.bench.night import SUBURBAN, night_hour
 #: the night's hours benched: 22:00 (the busiest) and 02:00
 HOURS = {0: "22:00", 4: "02:00"}
 #: record_traffic CPU-s per 1,800 simulated s before the world's step was compiled (numpy and pymunk),
-#: median of 3 runs alternating with the compiled step in one sitting (fresh processes; after: 2.9 and 1.5)
+#: median of 3 runs alternating with the compiled step in one sitting (fresh processes; after: 2.9 and 1.5,
+#: then 4.0 and 2.1 once the moves went back to being integrated by the agents' pymunk bodies)
 BEFORE_CPU_S = {0: 26.0, 4: 11.7}
 BEFORE_SAMPLE_S = 1800.0
 #: simulated seconds of the warm-up record (the first agents enter in its first minute)

@@ -3,7 +3,7 @@ checked against, bit for bit (``test_compiled.py``).
 
 Kept as it ran (``citysim.world.behaviour`` and ``conflicts`` at the commit before the compiled
 step), but for its two ends: it reads the world's arrays instead of pymunk bodies, and hands the
-moves to real pymunk kinematic bodies, which integrate them as the world once did.
+moves to pymunk kinematic bodies one by one (property by property, as the world once did).
 
 Conventions: world frame, metres, seconds, m/s; angles rad CCW from +x; offsets metres to the
 left of the leg direction.

@@ -139,8 +139,7 @@ def test_nobody_gets_stuck_and_all_leave_at_the_ends(busy_hour):
 def test_memory_stays_flat(busy_hour):
     world = busy_hour.world
     assert world.spawned_count - world.removed_count == world.agent_count
-    # the leavers' rows are dropped: one row of state per agent in the street
-    assert len(world._state) == world._vu.shape[1] == len(world._movers) == world.agent_count
+    assert len(world.space.bodies) == world.agent_count == len(world.space.shapes)
     assert world.removed_count > 0.9 * world.spawned_count
 
 
