@@ -1,46 +1,63 @@
 """The moving world: agents as pymunk bodies following their routes without overlapping.
 
-Every agent is a *kinematic* pymunk body carrying a box shape (its ground
-footprint). Kinematic, not dynamic, because the motion is prescribed by the
-behaviour model (``citysim.world.behaviour``: path following, car following,
-giving way): a kinematic body follows the velocity it is given exactly, is
-never shoved off its sidewalk or lane by a contact impulse, and costs the
-solver nothing (Chipmunk does not collide kinematic bodies with each other).
-Dynamic bodies would resolve contacts only after they overlap, with some
-penetration slop; here overlaps are prevented before they happen. Each step
-the behaviour sets every body's velocity and angular velocity and
-``Space.step`` integrates the poses.
+Every agent is a *kinematic* pymunk body carrying a box shape (its ground footprint) in the
+world's ``space`` (``citysim.world.bodies``): its motion is prescribed by the behaviour model
+(``citysim.world.behaviour``: path following, car following, giving way), so it follows the
+velocity it is given exactly, is never shoved off its sidewalk or lane, and overlaps are prevented
+before they happen instead of resolved after. Each step the behaviour, compiled (numba), decides
+every agent's move from arrays of the agents' state, one row per agent in order of entry
+(``citysim.world.rows``); the moves are handed to the bodies as velocity and angular velocity,
+``Space.step`` integrates the poses, and the rows read them back.
 
 Agents are spawned into per-entry queues and enter when their entry is free;
 they leave at the street ends (or at the end of their route) and are removed
-from the space, so memory stays flat. Same street, same spawns, same rng ->
-the same trajectories, bit for bit.
+from the space (and their rows dropped), so memory stays flat. Same street, same spawns, same
+rng -> the same trajectories, bit for bit.
+
+Conventions: world frame of DESIGN.md, metres, seconds, m/s; angles rad CCW from +x.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import deque
-from collections.abc import Generator
-from typing import TYPE_CHECKING
+from collections.abc import Callable, Generator
 
 import numpy as np
-import pymunk
 
 from citysim.config.kinds import AGENT_KINDS
 from citysim.world.agents import AgentState, AgentTraits, MemberState
-from citysim.world.behaviour import Layout, Mover, layout_for, plan_moves
+from citysim.world.bodies import Bodies
 from citysim.world.geometry import Leg, Route, oriented_overlaps
+from citysim.world.rows import (
+    LENGTH,
+    N_COLUMNS,
+    PAUSE,
+    PHASE,
+    STILL,
+    TARGET,
+    TH,
+    VEL,
+    WIDTH,
+    Mover,
+    X,
+    new_row,
+    set_leg,
+)
 from citysim.world.street import Street
-
-if TYPE_CHECKING:
-    pass
 
 __all__ = ["Leg", "Route", "World", "physics_process"]
 
 TWO_PI = 2.0 * math.pi
 #: Clearance a newcomer needs to everyone at its entry pose, m (the gap ahead is checked apart).
 ENTRY_CLEARANCE_M = 0.05
+
+# AgentState's frozen-dataclass __init__ sets its fields one object.__setattr__ at a time; the
+# world hands out a few every step, so it builds each with all fields at once, the same objects
+# (as citysim.sim.replay does)
+_new_object = object.__new__
+_set_attribute = object.__setattr__
 
 
 class World:
@@ -53,15 +70,18 @@ class World:
     def __init__(self, street: Street, rng: np.random.Generator) -> None:
         self.street = street
         self.rng = rng
-        self.space = pymunk.Space()
         self.t_s = 0.0
+        self._bodies = Bodies()  # one pymunk kinematic body per agent, in the rows' order
+        self.space = self._bodies.space
         self._agents: dict[int, Mover] = {}
+        self._movers: list[Mover] = []  # the same, in order of entry: the rows' order
+        self._state = np.zeros((0, N_COLUMNS))  # one row per agent, in order of entry (rows.py)
+        self._vu = np.zeros((2, 0, 2))  # velocities and leg directions, same order
         self._pending: dict[str, deque[tuple[int, AgentTraits, Route]]] = {}
         self._next_id = 0
         self.spawned_count = 0
         self.removed_count = 0
         self.blocked_moves = 0  # moves the last-resort overlap check cancelled (diagnostic)
-        self._layout_cache: Layout | None = None
 
     # ------------------------------------------------------------------ public
     @property
@@ -88,41 +108,36 @@ class World:
         """Advance the world by ``dt_s`` seconds (admit queued agents, move, remove leavers)."""
         if not dt_s > 0:
             raise ValueError(f"dt_s must be > 0 s, got {dt_s}")
-        self._admit()
-        agents = list(self._agents.values())
-        if agents:
-            self._layout_cache = layout_for(agents, self._layout_cache)
-            self.blocked_moves += plan_moves(agents, self._layout_cache, dt_s, self.t_s)
-        self.space.step(dt_s)
-        if agents:
-            self._advance_routes(agents, dt_s)
+        if self._pending:
+            self._admit()
+        if self._movers:
+            move_agents, _ = _compiled()
+            self.blocked_moves += move_agents(self._state, self._vu, dt_s, self.t_s)
+        self._bodies.step(self._state, self._vu, dt_s)  # the space integrates the moves
+        if self._movers:
+            self._advance_routes(dt_s)
         self.t_s += dt_s
 
     def states(self) -> list[AgentState]:
         """Immutable snapshots of all agents in the street, in order of entry."""
+        if not self._movers:
+            return []
         out = []
-        for a in self._agents.values():
-            x, y = a.body.position
+        poses = self._state[:, : PHASE + 1].tolist()
+        velocities = self._vu[VEL].tolist()
+        for a, (x, y, th, phase), (vx, vy) in zip(self._movers, poses, velocities, strict=True):
+            t = a.traits
             members = tuple(
-                MemberState(m.forward_m, m.left_m, m.width_m, m.height_m, m.length_m, p)
-                for m, p in zip(a.traits.members, a.member_phases, strict=True)
-            )
-            out.append(
-                AgentState(
-                    object_id=a.oid,
-                    cls=a.traits.cls,
-                    x_m=float(x),
-                    y_m=float(y),
-                    heading_rad=(a.body.angle + math.pi) % TWO_PI - math.pi,
-                    speed_mps=math.hypot(*a.velocity),
-                    length_m=a.traits.length_m,
-                    width_m=a.traits.width_m,
-                    height_m=a.traits.height_m,
-                    gait_phase_rad=a.phase,
-                    members=members,
-                    light_on=a.traits.light_on,
-                )
-            )
+                _member_state(m, p) for m, p in zip(t.members, a.member_phases, strict=True)
+            ) if t.members else ()
+            state = _new_object(AgentState)
+            _set_attribute(state, "__dict__", {
+                "object_id": a.oid, "cls": t.cls, "x_m": x, "y_m": y,
+                "heading_rad": (th + math.pi) % TWO_PI - math.pi, "speed_mps": math.hypot(vx, vy),
+                "length_m": t.length_m, "width_m": t.width_m, "height_m": t.height_m,
+                "gait_phase_rad": phase, "members": members, "light_on": t.light_on,
+            })  # fmt: skip
+            out.append(state)
         return out
 
     # --------------------------------------------------------------- admission
@@ -137,37 +152,35 @@ class World:
             motion = AGENT_KINDS[traits.cls].motion
             speed = traits.desired_speed_mps
             if self._agents:
-                others = list(self._agents.values())
-                xy = np.array([[x, y]] + [tuple(a.body.position) for a in others])
-                th = np.array([heading] + [a.body.angle for a in others])
-                ln = np.array([traits.length_m] + [a.traits.length_m for a in others])
-                wd = np.array([traits.width_m] + [a.traits.width_m for a in others])
+                n = len(self._state)
+                xy, th = np.empty((n + 1, 2)), np.empty(n + 1)
+                ln, wd = np.empty(n + 1), np.empty(n + 1)
+                xy[0], th[0], ln[0], wd[0] = (x, y), heading, traits.length_m, traits.width_m
+                xy[1:], th[1:] = self._state[:, X : X + 2], self._state[:, TH]
+                ln[1:], wd[1:] = self._state[:, LENGTH], self._state[:, WIDTH]
                 if oriented_overlaps(xy, th, ln, wd, margin_m=ENTRY_CLEARANCE_M)[0].any():
                     continue
-                gap = self._gap_ahead(x, y, leg, traits, others)
+                gap = self._gap_ahead(x, y, leg, traits)
                 if gap < motion.min_gap_m:
                     continue
                 speed = min(speed, max(0.0, (gap - motion.min_gap_m) / motion.headway_s))
             queue.popleft()
             if not queue:
                 del self._pending[key]
-            body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-            body.position = (x, y)
-            body.angle = heading
-            shape = pymunk.Poly.create_box(body, (traits.length_m, traits.width_m))
-            self.space.add(body, shape)
-            agent = Mover(oid, traits, route.legs, body, shape)
-            agent.speed_mps = speed
+            agent = Mover(oid, traits, route.legs)
+            self._bodies.add((x, y, heading), traits.length_m, traits.width_m)
+            row, vu = new_row(agent, (x, y, heading), speed)
+            self._state = np.concatenate([self._state, row])
+            self._vu = np.concatenate([self._vu, vu], axis=1)
             self._agents[oid] = agent
+            self._movers.append(agent)
             self.spawned_count += 1
 
-    @staticmethod
-    def _gap_ahead(x: float, y: float, leg: Leg, traits: AgentTraits, others: list[Mover]) -> float:
+    def _gap_ahead(self, x: float, y: float, leg: Leg, traits: AgentTraits) -> float:
         """Free distance ahead of a footprint at (x, y) on ``leg``, within its corridor, m."""
         ux, uy = leg.unit
         best = math.inf
-        for a in others:
-            ox, oy = a.body.position
+        for a, (ox, oy) in zip(self._movers, self._state[:, X : X + 2].tolist(), strict=True):
             f = (ox - x) * ux + (oy - y) * uy
             lat = -(ox - x) * uy + (oy - y) * ux
             reach = max(a.traits.length_m, a.traits.width_m) / 2
@@ -175,20 +188,39 @@ class World:
                 best = min(best, f - reach - traits.length_m / 2)
         return best
 
-    # ------------------------------------------------------ after the space stepped
-    def _advance_routes(self, agents: list[Mover], dt: float) -> None:
-        """After the space stepped: gait phases, leg changes, removal of leavers, pauses (animals)."""
-        for a in agents:
-            speed = math.hypot(*a.velocity)
-            dist = speed * dt
-            a.phase = (a.phase + TWO_PI * dist / a.traits.stride_m) % TWO_PI
+    # ------------------------------------------------------ after the move
+    def _advance_routes(self, dt: float) -> None:
+        """After the move: gait phases, leg changes, removal of leavers, pauses (animals)."""
+        _, advance = _compiled()
+        agents = self._movers
+        speeds = [math.hypot(vx, vy) for vx, vy in self._vu[VEL].tolist()]
+        leg_done = np.zeros(len(agents), dtype=bool)
+        done = advance(self._state, self._vu, np.array(speeds), dt, self.t_s, leg_done)
+        gone = self._next_legs(np.flatnonzero(leg_done).tolist()) if done else []
+        for i, (a, speed) in enumerate(zip(agents, speeds, strict=True)):
             if a.member_phases:
-                a.member_phases = [
-                    (p + TWO_PI * dist / a.traits.stride_m) % TWO_PI for p in a.member_phases
-                ]
-            held = speed < 0.05 and not a.waiting and a.pause_until_s < self.t_s
-            a.still_s = a.still_s + dt if held else 0.0
-            x, y = a.body.position
+                dist = speed * dt
+                a.member_phases = [(p + TWO_PI * dist / a.traits.stride_m) % TWO_PI for p in a.member_phases]
+            pauses = a.pauses  # animals stop now and then
+            if pauses is not None and i not in gone and self._state[i, PAUSE] < self.t_s:
+                if self.rng.random() < dt / pauses.every_s:
+                    self._state[i, PAUSE] = self.t_s + float(self.rng.uniform(*pauses.duration_s))
+        if gone:
+            self._bodies.remove(gone)
+            self._state = np.delete(self._state, gone, axis=0)
+            self._vu = np.delete(self._vu, gone, axis=1)
+            for i in gone:
+                del self._agents[agents[i].oid]
+            self._movers = [a for i, a in enumerate(agents) if i not in gone]
+            self.removed_count += len(gone)
+
+    def _next_legs(self, rows: list[int]) -> list[int]:
+        """Move the agents of ``rows`` that reached their leg's end on to the next leg; the rows of
+        those that finished their route."""
+        gone = []
+        for i in rows:
+            a = self._movers[i]
+            x, y = self._state[i, X : X + 2].tolist()
             while True:
                 leg = a.leg
                 ux, uy = leg.unit
@@ -196,25 +228,19 @@ class World:
                 if s < leg.length_m:
                     break
                 if a.leg_i + 1 == len(a.legs):
-                    self._remove(a)
+                    gone.append(i)
                     break
                 a.leg_i += 1
-                a.target_m = a.leg.pref_m
-            pauses = AGENT_KINDS[a.traits.cls].pauses  # animals stop now and then
-            if a.oid in self._agents and pauses is not None and a.pause_until_s < self.t_s:
-                if self.rng.random() < dt / pauses.every_s:
-                    a.pause_until_s = self.t_s + float(self.rng.uniform(*pauses.duration_s))
-
-    def _remove(self, a: Mover) -> None:
-        self.space.remove(a.shape, a.body)
-        del self._agents[a.oid]
-        self.removed_count += 1
+                self._state[i, TARGET] = a.leg.pref_m
+            set_leg(self._state, self._vu, i, a)
+        return gone
 
     # ------------------------------------------------------------- diagnostics
     def stuck_agents(self, min_still_s: float = 60.0) -> list[int]:
         """Ids of agents held still for ``min_still_s`` by others (not waiting at a kerb or
         pausing): a behaviour bug if ever non-empty."""
-        return [a.oid for a in self._agents.values() if a.still_s >= min_still_s]
+        still = self._state[:, STILL].tolist()
+        return [a.oid for a, s in zip(self._movers, still, strict=True) if s >= min_still_s]
 
     def traits_of(self, object_id: int) -> AgentTraits:
         """How an agent in the street looks and how fast it wants to go."""
@@ -223,6 +249,26 @@ class World:
     def route_leg(self, object_id: int) -> Leg:
         """The leg an agent is on now (tests and debugging)."""
         return self._agents[object_id].leg
+
+
+@functools.cache
+def _compiled() -> tuple[Callable, Callable]:
+    """The compiled step (``behaviour.move_agents``, ``moves_compiled.advance``), imported on the
+    first step: it loads numba, which a process that only replays recorded traffic never needs."""
+    from citysim.world.behaviour import move_agents
+    from citysim.world.moves_compiled import advance
+
+    return move_agents, advance
+
+
+def _member_state(m: MemberState, phase: float) -> MemberState:
+    """Group member ``m`` at gait phase ``phase`` (its other fields as drawn)."""
+    state = _new_object(MemberState)
+    _set_attribute(state, "__dict__", {
+        "forward_m": m.forward_m, "left_m": m.left_m, "width_m": m.width_m, "height_m": m.height_m,
+        "length_m": m.length_m, "gait_phase_rad": phase,
+    })  # fmt: skip
+    return state
 
 
 def physics_process(env, world: World, physics_hz: float) -> Generator:
