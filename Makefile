@@ -14,15 +14,15 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-# suburban_night: every controller in fast mode (the shipped sensor model) over the night's first
-# 10 minutes, its first minute again at full fidelity as the check, and the year's figures.
+# suburban_night: the whole night in fast mode (the shipped sensor model) for always_on, oracle, pir,
+# schedule and detector_located, its first minute again at full fidelity as the check, and the year's figures.
 # Prints each table; ends with the paths of results/demo/night/report.html and .../year/report.html.
 demo: $(STAMP)
 	$(PY) -m experiments.demo
 
-# The same with the whole night (28,800 simulated seconds) in fast mode: long (see README).
+# The same with every controller of the scenario over the whole night: about 7 minutes on 2 cores (see README).
 demo-night: $(STAMP)
-	$(PY) -m experiments.demo --night-s 28800
+	$(PY) -m experiments.demo --controllers all
 
 # one worker per core; a test file stays on one worker, so its module fixtures run once
 test: $(STAMP)

@@ -10,10 +10,11 @@ measured in the same run on the same frames:
 * renderer: ms per frame with 0, 5 and 20 objects, beside the detector's ms/frame;
 * simulation: simulated seconds per wall second per controller replaying the recorded traffic
   (as in a comparison), and of the traffic recorder, which runs once for all; peak memory;
+* traffic: CPU seconds of recording the world alone (the compiled step) at 22:00 and 02:00;
 * sweeps: a 16-point sweep on 2 Dask workers vs 1;
 * whole night: every controller of suburban_night through one comparison on 2 workers, the
   first 10 minutes at full fidelity scaled to the night (``--night``: the whole night, measured;
-  long), and fast mode from a sample of each hour of the night;
+  long), and fast mode from a sample of each hour of the night and as one whole-night run;
 * year: ``citysim year`` of suburban_night in fast mode, every controller.
 
 Each whole-night and year figure is printed beside the figure measured before.
@@ -303,14 +304,26 @@ def bench_night_fast() -> dict:
     return fast()
 
 
+def bench_night_fast_whole() -> dict:
+    from experiments.bench.night import bench_night_fast_whole as whole
+
+    return whole()
+
+
+def bench_traffic() -> dict:
+    from experiments.bench.world import bench_world
+
+    return bench_world()
+
+
 def bench_year_fast() -> dict:
     from experiments.bench.year import bench_year
 
     return bench_year()
 
 
-SECTIONS = (bench_detector, bench_render, bench_sim, bench_sweep, bench_night_sample, bench_night_fast,
-            bench_year_fast)
+SECTIONS = (bench_detector, bench_render, bench_sim, bench_traffic, bench_sweep, bench_night_sample, bench_night_fast,
+            bench_night_fast_whole, bench_year_fast)
 
 
 def main(argv: list[str] | None = None) -> int:

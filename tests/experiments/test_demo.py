@@ -7,8 +7,8 @@ from experiments import demo
 
 @pytest.mark.parametrize(("argv", "option"), [
     (["--night-s", "0"], "--night-s"), (["--night-s", "28801"], "--night-s"),
-    (["--check-s", "700"], "--check-s"), (["--night-s", "120", "--check-s", "121"], "--check-s"),
-    (["--year-sample-s", "10"], "--year-sample-s"),
+    (["--check-s", "0"], "--check-s"), (["--night-s", "120", "--check-s", "121"], "--check-s"),
+    (["--year-sample-s", "10"], "--year-sample-s"), (["--controllers", "pir,detectr"], "--controllers"),
 ])  # fmt: skip
 def test_bad_demo_options_exit_2_before_any_simulation(argv, option, capsys, monkeypatch):
     monkeypatch.setattr(demo, "citysim", lambda *a: pytest.fail("simulated although an option was bad"))
@@ -16,19 +16,30 @@ def test_bad_demo_options_exit_2_before_any_simulation(argv, option, capsys, mon
         demo.main(argv)
     assert stop.value.code == 2
     err = capsys.readouterr().err
-    assert option in err and "must be in" in err
+    assert option in err and ("must be in" in err or "did you mean detector" in err)
 
 
 def test_the_demo_runs_the_three_commands_in_order_and_says_where_the_reports_are(tmp_path, capsys, monkeypatch):
     calls = []
     monkeypatch.setattr(demo, "citysim", lambda argv: calls.append(argv) or 0)
-    assert demo.main(["--out", str(tmp_path), "--night-s", "28800"]) == 0
+    assert demo.main(["--out", str(tmp_path)]) == 0
     assert [c[0] for c in calls] == ["run", "validate", "year"]
     assert calls[0][calls[0].index("--fidelity") + 1] == "fast"
-    assert calls[0][calls[0].index("--duration") + 1] == "28800"
+    assert calls[0][calls[0].index("--duration") + 1] == "28800"  # the whole night by default
+    # the night's controllers are the year's: its table and the year's answer the same question
+    night_controllers = calls[0][calls[0].index("--controllers") + 1]
+    assert night_controllers == calls[2][calls[2].index("--controllers") + 1]
     assert calls[1][calls[1].index("--duration") + 1] == f"{demo.CHECK_S:g}"
     # the year sets the camera controller a planner would install beside the bound and the conventional schemes
     year_controllers = calls[2][calls[2].index("--controllers") + 1].split(",")
     assert {"oracle", "pir", "schedule", "detector_located"} <= set(year_controllers)
     out = capsys.readouterr().out
     assert str(tmp_path / "night" / "report.html") in out and str(tmp_path / "year" / "report.html") in out
+
+
+def test_all_controllers_runs_the_scenarios_own_list(tmp_path, monkeypatch):
+    calls = []
+    monkeypatch.setattr(demo, "citysim", lambda argv: calls.append(argv) or 0)
+    assert demo.main(["--out", str(tmp_path), "--controllers", "all", "--night-s", "600"]) == 0
+    assert "--controllers" not in calls[0]  # citysim run's default: every controller of the scenario
+    assert calls[0][calls[0].index("--duration") + 1] == "600"
