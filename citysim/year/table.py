@@ -33,7 +33,8 @@ from tqdm import tqdm
 
 from citysim.config.scenario import Scenario, override
 from citysim.config.year import YearSpec
-from citysim.sim.compare import resolve_controllers, run_comparison
+from citysim.sim.calibration import sensor_model_for
+from citysim.sim.compare import needs_sensor_model, resolve_controllers, run_comparison
 from citysim.sim.workers import spawn_pool
 from citysim.year.factors import target_classes
 
@@ -123,12 +124,13 @@ def window_figures(folder: Path, labels: Sequence[str], t0_s: float, t1_s: float
     return {label: {k: v * per_hour for k, v in figs.items()} for label, figs in totals.items()}
 
 
-def run_cell(scenario: Scenario, cell: Cell, names: list[str] | None, fidelity: str) -> dict:
+def run_cell(scenario: Scenario, cell: Cell, names: list[str] | None, fidelity: str, sensor_model=None) -> dict:
     """One run of the table (in a worker process): its per-hour figures per controller."""
     variant = cell_variant(scenario, cell)
     folder = Path(tempfile.mkdtemp(prefix="citysim-year-")) / "run"
     try:
-        summary = run_comparison(variant, names, workers=1, fidelity=fidelity, out_dir=folder)
+        summary = run_comparison(variant, names, workers=1, fidelity=fidelity, out_dir=folder,
+                                 sensor_model=sensor_model)  # fmt: skip
         labels = list(summary["controllers"])
         return window_figures(folder, labels, cell.warmup_s, cell.duration_s)
     finally:
@@ -148,14 +150,19 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
                desc=f"{scenario.name}: {len(cells)} hour-runs x {len(labels)} controllers",
                bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
     start = time.perf_counter()
+    # the scenario's own sensor model for every cell: a cell's variant differs in traffic only, but an
+    # idle cell (no traffic) lists fewer kinds, so looking its model up by its own key calibrated a
+    # second model on empty nights (2 min on a fresh clone) that knew no road user
+    model = sensor_model_for(scenario, progress=progress) if fidelity == "fast" and needs_sensor_model(
+        resolve_controllers(scenario, names)) else None  # fmt: skip
     results: dict[Cell, dict] = {}
     if workers <= 1:
         for cell in cells:
-            results[cell] = run_cell(scenario, cell, names, fidelity)
+            results[cell] = run_cell(scenario, cell, names, fidelity, model)
             bar.update(cost[cell])
     else:
         with spawn_pool(workers) as pool:  # fresh interpreters, as run_comparison's own workers
-            futures = {pool.submit(run_cell, scenario, c, names, fidelity): c for c in cells}
+            futures = {pool.submit(run_cell, scenario, c, names, fidelity, model): c for c in cells}
             for done in as_completed(futures):
                 results[futures[done]] = done.result()
                 bar.update(cost[futures[done]])

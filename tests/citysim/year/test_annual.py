@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from pathlib import Path
 
 import pytest
 
@@ -62,3 +63,29 @@ def test_the_table_is_the_same_bit_for_bit_in_one_process_or_two(toy):
     two = build_table(toy, toy.year, [22, 23], ["pir"], workers=2, progress=False)
     assert one.levels == two.levels and one.idle == two.idle
     assert one.levels[1.0]["pir"]["zone_entries"] > 0  # the level run saw traffic in its window
+
+
+def test_a_fast_year_runs_every_cell_on_the_scenarios_own_sensor_model(toy, monkeypatch):
+    from citysim.sim import compare
+    from citysim.year import table as year_table
+    from tests.citysim.fast.synthetic import constant_model
+
+    looked_up = []
+    model = constant_model(0.3)
+    monkeypatch.setattr(year_table, "sensor_model_for", lambda scenario, **kw: looked_up.append(scenario) or model)
+    monkeypatch.setattr(compare, "sensor_model_for", lambda *a, **k: pytest.fail("a cell looked up a model of its own"))
+    table = build_table(toy, toy.year, [22, 23], ["detector_located"], workers=1, fidelity="fast", progress=False)
+    assert looked_up == [toy]  # once, for the scenario itself
+    assert set(table.idle) == {22, 23} and table.levels  # idle cells and traffic levels ran on it
+
+
+def test_an_idle_cell_alone_would_key_a_model_of_its_own():
+    # why the year hands its cells the scenario's model: with no traffic, suburban_night's e-scooters
+    # drop out of the kinds its key hashes, and a cell's own lookup calibrated a model on empty nights
+    from citysim.config.scenario import load_scenario
+    from citysim.sim.calibration import calibration_key
+    from citysim.year.table import Cell, cell_variant
+
+    suburban = load_scenario(Path(__file__).resolve().parents[3] / "scenarios" / "suburban_night.yaml")
+    idle = cell_variant(suburban, Cell("idle", 0.0, 2.0, 10.0, 60.0))
+    assert calibration_key(idle, 120.0, 2) != calibration_key(suburban, 120.0, 2)
