@@ -118,22 +118,17 @@ class RecordingSensors:
         raise ValueError("calibration records a detector controller, not a threshold baseline")
 
 
-class CalibrationRecorder(Collector):
-    """Collector of a calibration run: candidate rows and judged-frame rows (column lists)."""
+class StreetWatch(Collector):
+    """What every calibration recorder keeps of the street each step: the agents, the lamps' levels
+    and when they changed, and each camera's candidates (``in_view``)."""
 
-    def __init__(self, geometry: CameraGeometry, sensors: RecordingSensors, fps: float, target_threshold: float = 0.5):
+    def __init__(self, geometry: CameraGeometry, fps: float):
         self.geometry = geometry
-        self.sensors = sensors
         self.fps = fps
-        self.target_threshold = target_threshold
-        self.rows: dict[str, list] = {c: [] for c in ROW_COLUMNS}
-        self.frames: dict[str, list] = {c: [] for c in FRAME_COLUMNS}
         self.agents: list[AgentState] = []
         self.levels = np.zeros(geometry.n)
         self.changes = LevelChanges(geometry)
         self._placed = None
-        # each camera's tracks' sightings and windows, kept as detector_confirmed keeps them
-        self.windows = [TrackWindows(PAPER_K, PAPER_N, full_window=True) for _ in range(geometry.n)]
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
         self.agents = list(agents)
@@ -147,6 +142,28 @@ class CalibrationRecorder(Collector):
             xs = np.array([a.x_m for a in self.agents], dtype=np.float64)
             self._placed = (cand, self.geometry.light_at(xs, self.levels) if len(xs) else xs)
         return self._placed
+
+    def in_view(self, lamp_index: int) -> tuple[np.ndarray, int, float]:
+        """Camera ``lamp_index``'s candidates this frame (indices into the step's agents) and the
+        subject of its threshold condition (``nearest_in_view``: KINDS index, forward m)."""
+        cand, _ = self._candidates()
+        idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
+        beams = np.flatnonzero(cand.beam_seen[:, lamp_index]) if len(self.agents) else idx
+        kinds = np.array([KINDS.index(self.agents[j].cls) for j in idx.tolist()])
+        return (idx, *nearest_in_view(kinds, cand.forward_m[idx, lamp_index], cand.beam_forward_m[beams, lamp_index]))
+
+
+class CalibrationRecorder(StreetWatch):
+    """Collector of a detector's calibration run: candidate rows and judged-frame rows (column lists)."""
+
+    def __init__(self, geometry: CameraGeometry, sensors: RecordingSensors, fps: float, target_threshold: float = 0.5):
+        super().__init__(geometry, fps)
+        self.sensors = sensors
+        self.target_threshold = target_threshold
+        self.rows: dict[str, list] = {c: [] for c in ROW_COLUMNS}
+        self.frames: dict[str, list] = {c: [] for c in FRAME_COLUMNS}
+        # each camera's tracks' sightings and windows, kept as detector_confirmed keeps them
+        self.windows = [TrackWindows(PAPER_K, PAPER_N, full_window=True) for _ in range(geometry.n)]
 
     def on_frame(self, lamp_index: int, t_s: float, truth: Sequence, detections: Sequence | None) -> None:
         if detections is None:
@@ -175,15 +192,6 @@ class CalibrationRecorder(Collector):
                               strict=True))  # fmt: skip
         for col in FRAME_COLUMNS:
             self.frames[col].append(values[col])
-
-    def in_view(self, lamp_index: int) -> tuple[np.ndarray, int, float]:
-        """Camera ``lamp_index``'s candidates this frame (indices into the step's agents) and the
-        subject of its threshold condition (``nearest_in_view``: KINDS index, forward m)."""
-        cand, _ = self._candidates()
-        idx = np.flatnonzero(cand.seen[:, lamp_index]) if len(self.agents) else np.zeros(0, int)
-        beams = np.flatnonzero(cand.beam_seen[:, lamp_index]) if len(self.agents) else idx
-        kinds = np.array([KINDS.index(self.agents[j].cls) for j in idx.tolist()])
-        return (idx, *nearest_in_view(kinds, cand.forward_m[idx, lamp_index], cand.beam_forward_m[beams, lamp_index]))
 
     def _targets(self, lamp_index: int, detections: Sequence) -> dict[str, list]:
         """This frame's target detections under each decision set (``DECISION_PREFIXES``)."""

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from citysim.fast.model import background_age_bin
-from citysim.fast.records import CalibrationRecorder
+from citysim.fast.records import StreetWatch
 
 #: The columns of a region night's frame rows (what the area fits read).
 REGION_COLUMNS = ("camera", "frame", "light", "near_kind", "near_forward_m", "area_fraction", "age_bin",
@@ -70,7 +70,7 @@ class RegionSensors:
         raise ValueError("a region night records a threshold baseline, not a detector controller")
 
 
-class RegionRecorder(CalibrationRecorder):
+class RegionRecorder(StreetWatch):
     """Collector of a region night: one row per judged frame, its condition and largest region's share.
 
     A threshold baseline's ``on_frame`` returns no detections, judged or not (a frame is skipped
@@ -78,8 +78,9 @@ class RegionRecorder(CalibrationRecorder):
     """
 
     def __init__(self, geometry, sensors: RegionSensors, fps: float):
-        super().__init__(geometry, sensors, fps)
-        self.frames = {c: [] for c in REGION_COLUMNS}
+        super().__init__(geometry, fps)
+        self.sensors = sensors
+        self.frames: dict[str, list] = {c: [] for c in REGION_COLUMNS}
 
     def on_frame(self, lamp_index: int, t_s: float, truth: Sequence, detections: Sequence | None) -> None:
         segmenter = self.sensors.segmenters_made[lamp_index]

@@ -33,7 +33,7 @@ import numpy as np
 
 from citysim.config.scenario import Scenario
 from citysim.sim.night import build_night
-from citysim.world.agents import AgentColumns, AgentState, MemberState
+from citysim.world.agents import AgentColumns, AgentState, MemberState, frozen_from_fields
 
 #: physics steps per chunk file (60 s at 30 Hz): small enough to stream, few enough files
 CHUNK_STEPS = 1800
@@ -41,20 +41,6 @@ CHUNK_STEPS = 1800
 DYNAMIC_COLUMNS = ("x_m", "y_m", "heading_rad", "speed_mps", "gait_phase_rad")
 _DONE = "done.pkl"
 _FAILED = "failed.txt"
-
-
-# AgentState's frozen-dataclass __init__ sets its 12 fields one object.__setattr__ at a time (about
-# twice the time of this way, measured): the replay builds each with all fields at once, the same
-# objects (as detector.detector builds its Detections; tests/citysim/sim/test_replay.py checks them)
-_new_object = object.__new__
-_set_attribute = object.__setattr__
-
-
-def _agent_state(fields: dict) -> AgentState:
-    """An AgentState of all its ``fields`` (name -> value, in field order), as ``AgentState(**fields)`` makes it."""
-    state = _new_object(AgentState)
-    _set_attribute(state, "__dict__", fields)
-    return state
 
 
 class TrafficError(RuntimeError):
@@ -234,7 +220,7 @@ class TrafficReplay:
                 phases = chunk["member_phases"][member : member + len(looks.members)]
                 member += len(looks.members)
                 members = tuple(MemberState(*m, p) for m, p in zip(looks.members, phases, strict=True))
-            out.append(_agent_state({"object_id": oid, "cls": looks.cls, "x_m": x, "y_m": y, "heading_rad": heading,
+            out.append(frozen_from_fields(AgentState, {"object_id": oid, "cls": looks.cls, "x_m": x, "y_m": y, "heading_rad": heading,
                                      "speed_mps": speed, "length_m": looks.length_m, "width_m": looks.width_m,
                                      "height_m": looks.height_m, "gait_phase_rad": phase, "members": members,
                                      "light_on": looks.light_on}))  # fmt: skip

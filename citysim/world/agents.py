@@ -23,6 +23,21 @@ import numpy as np
 from citysim.config.kinds import TARGET_KINDS, AgentKind, kind_of
 from citysim.config.motion import DrawOptions
 
+# A frozen dataclass's __init__ sets its fields one object.__setattr__ at a time (about twice the
+# time of this way, measured): the world and the replay, which hand out every agent's snapshot each
+# step, build them with all fields at once, the same objects (tests/citysim/sim/test_replay.py and
+# tests/citysim/world/test_compiled.py compare them with constructor-made ones)
+_new_object = object.__new__
+_set_attribute = object.__setattr__
+
+
+def frozen_from_fields(cls: type, fields: dict):
+    """An instance of the frozen dataclass ``cls`` of ``fields`` (name -> value, every field in field
+    order), as ``cls(**fields)`` makes it."""
+    obj = _new_object(cls)
+    _set_attribute(obj, "__dict__", fields)
+    return obj
+
 
 @dataclass(frozen=True)
 class MemberState:

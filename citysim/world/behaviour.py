@@ -34,17 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from citysim.world.behaviour_compiled import (
-    CLEARANCE_M,
-    IMPATIENCE_S,
-    N_LATERAL_CANDIDATES,
-    STEP_LAT,
-    TILT_RUN,
-    W_COMFORT,
-    W_KEEP,
-    W_PREF,
-    plan,
-)
+from citysim.world.behaviour_compiled import STEP_LAT, TILT_RUN, plan
 from citysim.world.conflicts import resolve_overlaps
 from citysim.world.moves_compiled import (
     ALONG_X,
@@ -61,9 +51,7 @@ from citysim.world.moves_compiled import (
 )
 from citysim.world.rows import LENGTH, TH, UNIT, VEL, WIDTH, X, Y
 
-__all__ = [
-    "CLEARANCE_M", "IMPATIENCE_S", "N_LATERAL_CANDIDATES", "W_COMFORT", "W_KEEP", "W_PREF", "move_agents",
-]  # fmt: skip
+__all__ = ["move_agents"]
 
 
 def move_agents(state: np.ndarray, vu: np.ndarray, dt: float, t_s: float, work: np.ndarray | None = None) -> int:

@@ -112,7 +112,7 @@ def leg_frame(state, vu, t_s):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def surroundings(state, vu, trig, v_dot, off, patience):  # pragma: no cover - compiled
-    """Every pair seen from each one's leg frame, [i, j]: j as i sees it (``behaviour.Surroundings``).
+    """Every pair seen from each one's leg frame, [i, j]: j as i sees it.
 
     Returns (lat, ext_l, gap, v_along, ahead, beside) as (N, N) arrays and (self_l, half) per agent."""
     n = state.shape[0]

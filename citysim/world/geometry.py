@@ -107,8 +107,3 @@ def oriented_overlaps(
     out = ~separated
     np.fill_diagonal(out, False)
     return out
-
-
-def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
-    """Angle(s) wrapped to [-pi, pi)."""
-    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi

@@ -69,7 +69,7 @@ NEAR_SLACK = 1e-9
 
 @njit(cache=True)
 def wrap_angle(a):  # pragma: no cover - compiled
-    """``citysim.world.geometry.wrap_angle``: (a + pi) % 2 pi - pi, numpy's remainder."""
+    """Angle ``a`` wrapped to [-pi, pi): (a + pi) % 2 pi - pi, as numpy's remainder computes it."""
     return (a + PI) % TWO_PI - PI
 
 

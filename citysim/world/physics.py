@@ -27,7 +27,7 @@ from collections.abc import Callable, Generator
 import numpy as np
 
 from citysim.config.kinds import AGENT_KINDS
-from citysim.world.agents import AgentState, AgentTraits, MemberState
+from citysim.world.agents import AgentState, AgentTraits, MemberState, frozen_from_fields
 from citysim.world.bodies import Bodies
 from citysim.world.geometry import Leg, Route, oriented_overlaps
 from citysim.world.rows import (
@@ -52,12 +52,6 @@ __all__ = ["Leg", "Route", "World", "physics_process"]
 TWO_PI = 2.0 * math.pi
 #: Clearance a newcomer needs to everyone at its entry pose, m (the gap ahead is checked apart).
 ENTRY_CLEARANCE_M = 0.05
-
-# AgentState's frozen-dataclass __init__ sets its fields one object.__setattr__ at a time; the
-# world hands out a few every step, so it builds each with all fields at once, the same objects
-# (as citysim.sim.replay does)
-_new_object = object.__new__
-_set_attribute = object.__setattr__
 
 
 class World:
@@ -130,14 +124,12 @@ class World:
             members = tuple(
                 _member_state(m, p) for m, p in zip(t.members, a.member_phases, strict=True)
             ) if t.members else ()
-            state = _new_object(AgentState)
-            _set_attribute(state, "__dict__", {
+            out.append(frozen_from_fields(AgentState, {
                 "object_id": a.oid, "cls": t.cls, "x_m": x, "y_m": y,
                 "heading_rad": (th + math.pi) % TWO_PI - math.pi, "speed_mps": math.hypot(vx, vy),
                 "length_m": t.length_m, "width_m": t.width_m, "height_m": t.height_m,
                 "gait_phase_rad": phase, "members": members, "light_on": t.light_on,
-            })  # fmt: skip
-            out.append(state)
+            }))  # fmt: skip
         return out
 
     # --------------------------------------------------------------- admission
@@ -263,12 +255,10 @@ def _compiled() -> tuple[Callable, Callable]:
 
 def _member_state(m: MemberState, phase: float) -> MemberState:
     """Group member ``m`` at gait phase ``phase`` (its other fields as drawn)."""
-    state = _new_object(MemberState)
-    _set_attribute(state, "__dict__", {
+    return frozen_from_fields(MemberState, {
         "forward_m": m.forward_m, "left_m": m.left_m, "width_m": m.width_m, "height_m": m.height_m,
         "length_m": m.length_m, "gait_phase_rad": phase,
     })  # fmt: skip
-    return state
 
 
 def physics_process(env, world: World, physics_hz: float) -> Generator:

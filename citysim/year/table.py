@@ -144,7 +144,8 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
     import time
 
     cells = plan_cells(scenario, year, dark_hours)
-    labels = [s.display_name for s in resolve_controllers(scenario, names)]
+    specs = resolve_controllers(scenario, names)
+    labels = [s.display_name for s in specs]
     cost = {c: c.duration_s * len(labels) for c in cells}
     bar = tqdm(total=sum(cost.values()), unit="sim s", disable=not progress,
                desc=f"{scenario.name}: {len(cells)} hour-runs x {len(labels)} controllers",
@@ -153,8 +154,7 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
     # the scenario's own sensor model for every cell: a cell's variant differs in traffic only, but an
     # idle cell (no traffic) lists fewer kinds, so looking its model up by its own key calibrated a
     # second model on empty nights (2 min on a fresh clone) that knew no road user
-    model = sensor_model_for(scenario, progress=progress) if fidelity == "fast" and needs_sensor_model(
-        resolve_controllers(scenario, names)) else None  # fmt: skip
+    model = sensor_model_for(scenario, progress=progress) if fidelity == "fast" and needs_sensor_model(specs) else None
     results: dict[Cell, dict] = {}
     if workers <= 1:
         for cell in cells:

@@ -64,24 +64,32 @@ def timed_comparison(scenario: Scenario, workers: int, **kwargs) -> tuple[float,
         return time.perf_counter() - t0, cpu_s() - c0
 
 
-def bench_night(duration_s: float = SAMPLE_S, workers: int = 2, scenario_path: Path = SUBURBAN) -> dict:
-    """Wall and CPU seconds of every controller over ``duration_s`` at full fidelity on ``workers``
+#: what each fidelity's whole night of every controller took before, and its target
+BEFORE_WHOLE_NIGHT = {
+    "full": f"before: {BEFORE_WHOLE_NIGHT_WALL_S / 3600:.1f} h wall; target <= 15 min",
+    "fast": "before: 15.1 min wall, 1,054 CPU-s (one run, before the world's step was compiled); target <= 30 s",
+}
+
+
+def bench_night(duration_s: float = SAMPLE_S, workers: int = 2, scenario_path: Path = SUBURBAN,
+                fidelity: str = "full") -> dict:  # fmt: skip
+    """Wall and CPU seconds of every controller over ``duration_s`` in ``fidelity`` on ``workers``
     processes, and the whole night's (measured, or scaled from the sample)."""
     if not 0 < duration_s <= WHOLE_NIGHT_S:
         raise ValueError(f"duration_s: must be in (0, {WHOLE_NIGHT_S:.0f}] s, got {duration_s}")
     scenario = override(load_scenario(scenario_path), {"duration_s": float(duration_s)})
     n = len(scenario.controllers)
-    print(f"== whole night, full fidelity: {scenario.name}, {n} controllers, {duration_s:.0f} sim s, {workers} workers ==")
-    wall_s, cpu = timed_comparison(scenario, workers, progress=True)
+    mode = "full fidelity" if fidelity == "full" else "fast mode"
+    print(f"== whole night, {mode}: {scenario.name}, {n} controllers, {duration_s:.0f} sim s, {workers} workers ==")
+    wall_s, cpu = timed_comparison(scenario, workers, fidelity=fidelity, progress=fidelity == "full")
     scale = WHOLE_NIGHT_S / duration_s
     how = "measured" if duration_s >= WHOLE_NIGHT_S else f"scaled from the first {duration_s:.0f} s, an upper bound"
     print(f"{n} controllers x {duration_s:.0f} sim s: {wall_s:.0f} s wall, {cpu:.0f} CPU-s "
           f"({duration_s * n / wall_s:.1f} sim s per wall s, all controllers together)")
-    print(f"whole night, every controller, {workers} cores: {wall_s * scale / 60:.1f} min wall, "
-          f"{cpu * scale / 3600:.2f} CPU-h ({how}); before: {BEFORE_WHOLE_NIGHT_WALL_S / 3600:.1f} h wall; "
-          f"target <= 15 min")
-    return {"duration_s": duration_s, "wall_s": wall_s, "cpu_s": cpu, "whole_night_wall_s": wall_s * scale,
-            "whole_night_cpu_s": cpu * scale, "before_whole_night_wall_s": BEFORE_WHOLE_NIGHT_WALL_S}  # fmt: skip
+    print(f"whole night, every controller, {mode}, {workers} cores: {wall_s * scale / 60:.1f} min wall, "
+          f"{cpu * scale:.0f} CPU-s, {cpu * scale / 3600:.2f} CPU-h ({how}); {BEFORE_WHOLE_NIGHT[fidelity]}")
+    return {"fidelity": fidelity, "duration_s": duration_s, "wall_s": wall_s, "cpu_s": cpu,
+            "whole_night_wall_s": wall_s * scale, "whole_night_cpu_s": cpu * scale}  # fmt: skip
 
 
 def night_hour(scenario: Scenario, hour: int, sample_s: float) -> Scenario:
@@ -110,14 +118,7 @@ def bench_night_fast_whole(workers: int = 2, scenario_path: Path = SUBURBAN) -> 
     """Fast mode, every controller, the whole night (22:00-06:00) as one run, measured (no sampling,
     so nothing is scaled: the pool's start-up and the traffic recorder count once, as in a user's
     ``citysim run --fidelity fast --duration 28800``)."""
-    scenario = override(load_scenario(scenario_path), {"duration_s": WHOLE_NIGHT_S})
-    n = len(scenario.controllers)
-    print(f"== whole night, fast mode, measured: {scenario.name}, {n} controllers, {WHOLE_NIGHT_S:.0f} sim s, "
-          f"{workers} workers ==")
-    wall_s, cpu = timed_comparison(scenario, workers, fidelity="fast", progress=False)
-    print(f"whole night, every controller, fast mode, {workers} cores: {wall_s / 60:.1f} min wall, {cpu:.0f} CPU-s "
-          f"(measured); target <= 30 s")
-    return {"fidelity": "fast", "whole_night_wall_s": wall_s, "whole_night_cpu_s": cpu}
+    return bench_night(WHOLE_NIGHT_S, workers, scenario_path, fidelity="fast")
 
 
 def bench_night_full_hours(sample_s: float = FULL_HOUR_SAMPLE_S, workers: int = 2, scenario_path: Path = SUBURBAN) -> dict:

@@ -17,15 +17,24 @@ import numpy as np
 import pymunk
 
 from citysim.config.kinds import AGENT_KINDS
-from citysim.world.conflicts import resolve_overlaps
-from citysim.world.geometry import wrap_angle
-from citysim.world.rows import PAUSE, SPEED, STILL, TARGET, TH, VEL, Mover, X, Y
 
-N_LATERAL_CANDIDATES = 9
-W_PREF, W_COMFORT, W_KEEP = 0.3, 1.5, 0.2
-IMPATIENCE_S = 2.0
-CLEARANCE_M = 0.01
-CROSSING_MARGIN_S = 1.5
+# the rules' parameters are the compiled step's own: the oracle states the same rules with them
+from citysim.world.behaviour_compiled import (
+    CLEARANCE_M,
+    IMPATIENCE_S,
+    N_LATERAL_CANDIDATES,
+    W_COMFORT,
+    W_KEEP,
+    W_PREF,
+)
+from citysim.world.conflicts import resolve_overlaps
+from citysim.world.conflicts_compiled import CROSSING_MARGIN_S
+from citysim.world.rows import MOTION_FIELDS, PAUSE, SPEED, STILL, TARGET, TH, VEL, Mover, X, Y
+
+
+def wrap_angle(a: np.ndarray | float) -> np.ndarray | float:
+    """Angle(s) wrapped to [-pi, pi) (``citysim.world.geometry.wrap_angle`` before the step was compiled)."""
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 def must_wait(agents, pos, vel, length, width, s_along, leg_len) -> tuple[np.ndarray, np.ndarray]:
@@ -99,12 +108,8 @@ class Layout:
         self.motion = np.array([_MOTION_ROWS[a.traits.cls] for a in agents]).T
 
 
-_MOTION_FIELDS = (
-    "accel_mps2", "comfort_decel_mps2", "max_decel_mps2", "headway_s", "min_gap_m", "lookahead_m",
-    "lateral_speed_mps", "lateral_margin_m", "horizon_s", "yaw_rate_rps", "max_tilt_rad",
-)  # fmt: skip
 _MOTION_ROWS = {
-    cls: tuple(getattr(k.motion, f) for f in _MOTION_FIELDS) for cls, k in AGENT_KINDS.items()
+    cls: tuple(getattr(k.motion, f) for f in MOTION_FIELDS) for cls, k in AGENT_KINDS.items()
 }
 
 

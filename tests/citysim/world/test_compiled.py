@@ -20,7 +20,7 @@ from citysim.world import physics
 from citysim.world.agents import AgentState, MemberState
 from citysim.world.behaviour import move_agents
 from citysim.world.bodies import Bodies
-from citysim.world.geometry import Leg, Route, oriented_overlaps, wrap_angle
+from citysim.world.geometry import Leg, Route, oriented_overlaps
 from citysim.world.moves_compiled import (
     DS,
     N_WORK,
@@ -59,7 +59,7 @@ from citysim.world.rows import (
 )  # fmt: skip
 from citysim.world.street import build_street
 from citysim.world.traffic import draw_arrival, start_traffic
-from tests.citysim.world.numpy_statement import reference_move
+from tests.citysim.world.numpy_statement import reference_move, wrap_angle
 
 SUBURBAN = Path(__file__).resolve().parents[3] / "scenarios" / "suburban_night.yaml"
 COLUMNS = {"x": X, "y": Y, "th": TH, "speed": SPEED, "target": TARGET, "waiting": WAITING}
