@@ -68,10 +68,13 @@ class LampBank:
 
     def __init__(self, ctx: ControlContext):
         self.ctx = ctx
-        self.lit_until_s = np.full(len(ctx.lamps), -math.inf)
-        self.first_trigger_s = np.full(len(ctx.lamps), math.nan)
-        self.last_trigger_s = np.full(len(ctx.lamps), math.nan)
-        self.triggers = np.zeros(len(ctx.lamps), dtype=np.int64)
+        # plain lists of plain floats and ints: a controller triggers lamps up to every physics step,
+        # where numpy's per-element access was most of a trigger's cost
+        n = len(ctx.lamps)
+        self.lit_until_s: list[float] = [-math.inf] * n
+        self.first_trigger_s: list[float] = [math.nan] * n
+        self.last_trigger_s: list[float] = [math.nan] * n
+        self.triggers: list[int] = [0] * n
         # no hold runs out before this time: release_expired has nothing to do until then (lamps
         # start unheld, so the first call looks at every lamp, as a lamp starting at full needs)
         self._next_expiry_s = -math.inf
@@ -98,12 +101,11 @@ class LampBank:
         """Called every physics step: lamps whose hold ran out go back to dim."""
         if t_s < self._next_expiry_s:
             return
-        for i in np.flatnonzero(self.lit_until_s <= t_s):
+        for i, until_s in enumerate(self.lit_until_s):
             lamp = self.ctx.lamps[i]
-            if lamp.target_level > self.ctx.dim_level:
+            if until_s <= t_s and lamp.target_level > self.ctx.dim_level:
                 lamp.set_target(t_s, self.ctx.dim_level)
-        held = self.lit_until_s[self.lit_until_s > t_s]
-        self._next_expiry_s = float(held.min()) if len(held) else math.inf
+        self._next_expiry_s = min((u for u in self.lit_until_s if u > t_s), default=math.inf)
 
 
 class Controller:
