@@ -72,6 +72,9 @@ class Night:
     _camera_streams: list[np.random.Generator] | None = None
     #: the recorded agents replayed instead of stepping ``world`` (None: step it)
     replay: AgentSource | None = None
+    #: run a physics step at once when no other event of the clock comes before it (``_physics``);
+    #: False: every step waits on its own timeout (the same steps at the same times, in the same order)
+    skip_idle_clock: bool = True
 
     @property
     def physics_dt_s(self) -> float:
@@ -92,11 +95,20 @@ class Night:
 
     def _physics(self, on_step: StepHook | None):
         dt_s = self.physics_dt_s
+        env = self.env
         k = 0
         while True:
             k += 1
             # scheduled at k * dt from the start, so steps do not drift with float sums
-            yield self.env.timeout(max(0.0, k * dt_s - self.env.now))
+            delay_s = max(0.0, k * dt_s - env.now)
+            if self.skip_idle_clock and env.peek() > env.now + delay_s:
+                # no event is due before this step (not even the end of ``run_until``): waiting on
+                # the clock would only pop this step's own timeout, at the time simpy would give it
+                # (``Environment.schedule``: now + delay). A night whose other processes sleep
+                # between whole seconds so runs most steps without simpy's event machinery.
+                env._now = env.now + delay_s
+            else:
+                yield env.timeout(delay_s)
             if self.replay is None:
                 self.world.step(dt_s)
                 self.agents = self.world.states()
