@@ -33,6 +33,15 @@ def zone_of(starts_m: np.ndarray, ends_m: np.ndarray, x_m: np.ndarray) -> np.nda
     return np.where(inside, j, -1)
 
 
+def place_of(starts_m: np.ndarray, ends_m: np.ndarray, x_m: np.ndarray) -> np.ndarray:
+    """Per point, like ``zone_of``, the index of the zone holding it, or for a point in no zone
+    -2 - i for the gap after zone i (-1 before the first): two points of the same gap see no zone
+    between them."""
+    j = np.searchsorted(starts_m, x_m, side="right") - 1
+    inside = (j >= 0) & (x_m < ends_m[np.maximum(j, 0)])
+    return np.where(inside, j, -2 - j)
+
+
 def step_masks(chunk: Any, zone: np.ndarray) -> list[int]:
     """Per step of ``chunk``: the bitmask of the zones (bit j: zone j) holding any of its rows
     (``zone``: per row, -1 for rows that count nowhere)."""

@@ -4,11 +4,11 @@ Most physics steps of a night change nothing a zone tracker holds: every tracked
 the one zone it is visiting, whose lamp's level did not change, so no visit opens or closes and
 its step is lit or dark throughout (``ZoneTracker._stays_in_zone``). For replayed steps that is
 known of a whole chunk at once: ``ZoneChunk`` marks the *static* steps, whose tracked objects are
-the previous step's, each in the same zone as then. A static step with the previous step's levels
+the previous step's, each in the same zone (or the same gap between zones) as then. A static step with the previous step's levels
 (the same shared read-only array, ``LampStates``) after a *settled* step (each tracked object's
-only open visit is the zone holding it, and it was lit already unless its zone is dark) is the
-long path's step, bit for bit, in a few operations: nothing for objects in lit zones, and one
-step's dark seconds for those in dark zones. Other steps take the long path, reading the rows'
+only open visit is the zone holding it, and it was lit already unless its zone is dark; objects in
+a gap have none) is the long path's step, bit for bit, in a few operations: nothing for objects
+in lit zones or gaps, and one step's dark seconds for those in dark zones. Other steps take the long path, reading the rows'
 object ids, classes and positions instead of building the agents' snapshots.
 
 Valid for disjoint zones in start order, one required level for every class and no look-ahead
@@ -22,19 +22,21 @@ from typing import Any
 
 import numpy as np
 
-from citysim.metrics.recorded_rows import lit_mask, recorded_step, step_masks, zone_of
+from citysim.metrics.recorded_rows import lit_mask, place_of, recorded_step, step_masks
 
 
 class ZoneChunk:
-    """What the short path reads of one replayed chunk: per row the zone holding a tracked object
-    (lamp index; -1 none, or not tracked), per step whether it is static and the zones its
-    tracked objects occupy (bitmask)."""
+    """What the short path reads of one replayed chunk: per row the place of a tracked object
+    (``place_of``: the lamp index of the zone holding it, negative in a gap between zones or
+    before or after them; -1 too for rows not tracked), per step whether it is static and the
+    zones its tracked objects occupy (bitmask)."""
 
     def __init__(self, chunk: Any, tracked_kinds, starts_m: np.ndarray, ends_m: np.ndarray, order: list[int]):
         self.chunk = chunk
         tracked = chunk.of_kinds(tracked_kinds)
-        in_sorted = zone_of(starts_m, ends_m, chunk.column("x_m"))
-        zone = np.where(tracked & (in_sorted >= 0), np.asarray(order)[np.maximum(in_sorted, 0)], -1)
+        in_sorted = place_of(starts_m, ends_m, chunk.column("x_m"))
+        zone = np.where(in_sorted >= 0, np.asarray(order)[np.maximum(in_sorted, 0)], in_sorted)
+        zone[~tracked] = -1
         self.zone: list[int] = zone.tolist()
         self.tracked: list[bool] = tracked.tolist()
         self.static: list[bool] = _static_steps(chunk, tracked, zone)
@@ -42,14 +44,14 @@ class ZoneChunk:
 
 
 def _static_steps(chunk: Any, tracked: np.ndarray, zone: np.ndarray) -> list[bool]:
-    """Per step: its tracked objects are the previous step's, each in the same zone (not -1) as
-    then. The first step of a chunk is never static (its previous step is another chunk's)."""
+    """Per step: its tracked objects are the previous step's, each in the same zone or the same
+    gap as then. The first step of a chunk is never static (its previous step is another chunk's)."""
     rows = np.flatnonzero(tracked)
     step, oid, where = chunk.step_of_row[rows], chunk.object_id[rows], zone[rows]
     by_object = np.lexsort((step, oid))  # each object's rows in step order
     s, o, z = step[by_object], oid[by_object], where[by_object]
     stayed = np.zeros(len(rows), dtype=bool)
-    stayed[1:] = (o[1:] == o[:-1]) & (s[1:] == s[:-1] + 1) & (z[1:] == z[:-1]) & (z[1:] >= 0)
+    stayed[1:] = (o[1:] == o[:-1]) & (s[1:] == s[:-1] + 1) & (z[1:] == z[:-1])
     moved = np.bincount(s[~stayed], minlength=chunk.n_steps) > 0
     count = np.bincount(step, minlength=chunk.n_steps)
     static = ~moved
@@ -127,8 +129,9 @@ class RecordedZones:
         return zip(chunk.object_list[first:end], chunk.cls_list[first:end], x_m, x_m, strict=True)
 
     def after_long_path(self, tracks: dict, at: tuple[ZoneChunk, int], levels: list[float]) -> None:
-        """Whether the long path left step ``at`` settled: every tracked object's only open visit is
-        the zone holding it, lit already unless that zone is dark."""
+        """Whether the long path left step ``at`` settled: every tracked object in a zone has that
+        zone's visit open and no other, lit already unless the zone is dark; every one in a gap
+        has no visit open (a static step moves it along its gap, touching no zone: nothing to do)."""
         zones, step = at
         chunk = zones.chunk
         self._settled = False
@@ -137,8 +140,9 @@ class RecordedZones:
                 continue
             j = zones.zone[row]
             visits = tracks[chunk.object_list[row]].visits
-            if j < 0 or len(visits) != 1 or j not in visits:
-                return
-            if visits[j].t_lit_s is None and self.is_lit(levels[j]):
+            if j < 0:
+                if visits:
+                    return
+            elif len(visits) != 1 or j not in visits or (visits[j].t_lit_s is None and self.is_lit(levels[j])):
                 return
         self._settled = True
