@@ -83,19 +83,25 @@ class LampBank:
         self.held_dim = False
 
     def trigger(self, lamp_index: int, t_s: float, hold_s: float | None = None) -> None:
+        self.trigger_all((lamp_index,), t_s, hold_s)
+
+    def trigger_all(self, lamp_indices: Sequence[int], t_s: float, hold_s: float | None = None) -> None:
+        """``trigger`` each of ``lamp_indices`` in turn (the oracle's lamps of a physics step)."""
         if self.held_dim:
             return
-        if self.triggers[lamp_index] == 0:
-            self.first_trigger_s[lamp_index] = t_s
-        self.last_trigger_s[lamp_index] = t_s
-        self.triggers[lamp_index] += 1
         until = t_s + (self.ctx.hold_s if hold_s is None else hold_s)
-        if until > self.lit_until_s[lamp_index]:
-            self.lit_until_s[lamp_index] = until
-        self._next_expiry_s = min(self._next_expiry_s, self.lit_until_s[lamp_index])
-        lamp = self.ctx.lamps[lamp_index]
-        if lamp.target_level < 1.0:
-            lamp.set_target(t_s, 1.0)
+        triggers, lit_until_s, lamps = self.triggers, self.lit_until_s, self.ctx.lamps
+        for i in lamp_indices:
+            if triggers[i] == 0:
+                self.first_trigger_s[i] = t_s
+            self.last_trigger_s[i] = t_s
+            triggers[i] += 1
+            if until > lit_until_s[i]:
+                lit_until_s[i] = until
+            self._next_expiry_s = min(self._next_expiry_s, lit_until_s[i])
+            lamp = lamps[i]
+            if lamp.target_level < 1.0:
+                lamp.set_target(t_s, 1.0)
 
     def release_expired(self, t_s: float) -> None:
         """Called every physics step: lamps whose hold ran out go back to dim."""

@@ -80,5 +80,4 @@ class Oracle(Controller):
             needed = self.needed_by_step(chunk)[agents.step]
         else:
             needed = self.zones_needed(agents).tolist()
-        for lamp_index in needed:
-            self.bank.trigger(lamp_index, t_s)
+        self.bank.trigger_all(needed, t_s)

@@ -342,6 +342,11 @@ class ZoneTracker:
             self._retire(object_id, self._t_s, completed=False)
 
     # ------------------------------------------------------------------ output
+    @property
+    def has_rows(self) -> bool:
+        """Whether ``rows`` has a completed visit to give (asked every step)."""
+        return bool(self._done)
+
     def rows(self, drain: bool = True) -> Iterator[dict[str, Any]]:
         """Completed visits, oldest first (objects.csv rows). ``drain`` drops them as they are read."""
         if not drain:

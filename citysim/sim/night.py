@@ -100,13 +100,14 @@ class Night:
         while True:
             k += 1
             # scheduled at k * dt from the start, so steps do not drift with float sums
-            delay_s = max(0.0, k * dt_s - env.now)
-            if self.skip_idle_clock and env.peek() > env.now + delay_s:
+            now_s = env.now
+            delay_s = max(0.0, k * dt_s - now_s)
+            if self.skip_idle_clock and env.peek() > now_s + delay_s:
                 # no event is due before this step (not even the end of ``run_until``): waiting on
                 # the clock would only pop this step's own timeout, at the time simpy would give it
                 # (``Environment.schedule``: now + delay). A night whose other processes sleep
                 # between whole seconds so runs most steps without simpy's event machinery.
-                env._now = env.now + delay_s
+                env._now = now_s + delay_s
             else:
                 yield env.timeout(delay_s)
             if self.replay is None:
