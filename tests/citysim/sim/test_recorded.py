@@ -95,6 +95,20 @@ def test_oracle_triggers_of_replayed_steps_are_their_lists(recorded):
     assert needed > 100
 
 
+@pytest.mark.parametrize("name", ["oracle", "pir"])
+def test_controllers_given_replayed_steps_trigger_as_given_their_lists(recorded, name):
+    scenario, folder = recorded
+    night, steps = replayed_steps(scenario, folder)
+    # two controllers of the same night: the same lamps' settings and the same random streams
+    short, long = (build_controller(build_night(scenario), ControllerSpec(name=name)) for _ in range(2))
+    for t_s, agents in steps:
+        short.on_physics_step(t_s, agents)
+        long.on_physics_step(t_s, list(agents))
+    banks = [(c.bank.triggers, c.bank.first_trigger_s, c.bank.last_trigger_s, c.bank.lit_until_s) for c in (short, long)]
+    assert repr(banks[0]) == repr(banks[1]) and sum(short.bank.triggers) > 20
+    assert [lamp.energy_j for lamp in short.ctx.lamps] == [lamp.energy_j for lamp in long.ctx.lamps]
+
+
 def test_physics_steps_run_at_the_times_and_in_the_order_of_the_clock_queue(recorded):
     """Steps run without the queue when nothing else is due: the same times, in the same order
     among other events (some due exactly on a step) and ``run_until``'s ends."""
