@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from citysim.metrics.recorded_rows import lit_mask, place_of, recorded_step, step_masks
+from citysim.metrics.recorded_rows import lit_mask, place_of, step_masks
 
 
 class ZoneChunk:
@@ -76,10 +76,10 @@ class RecordedZones:
         self._lit: tuple[np.ndarray | None, int] = (None, 0)  # a levels array and its lit bitmask
 
     def step_of(self, agents) -> tuple[ZoneChunk, int] | None:
-        recorded = recorded_step(agents)
-        if recorded is None:
+        chunk = getattr(agents, "chunk", None)  # ``recorded_step``, asked every step
+        if chunk is None:
             return None
-        chunk, step = recorded
+        step = agents.step
         if self._zones is None or self._zones.chunk is not chunk:
             self._zones = ZoneChunk(chunk, self.tracked_kinds, self.starts_m, self.ends_m, self.order)
         return self._zones, step

@@ -155,16 +155,17 @@ class ZoneTracker:
 
         ``levels``: one visible-light level (0..1) per ``street.lamps`` entry at ``t_s``.
         """
-        levels = np.asarray(levels, dtype=float)
-        if levels.shape != self._starts.shape:
-            raise ValueError(
-                f"ZoneTracker.update levels: need one level per street lamp, shape "
-                f"{self._starts.shape}, got {levels.shape}"
-            )
+        same_levels = levels is self._levels_array
+        if not same_levels:  # (the same read-only levels as before were checked then)
+            levels = np.asarray(levels, dtype=float)
+            if levels.shape != self._starts.shape:
+                raise ValueError(
+                    f"ZoneTracker.update levels: need one level per street lamp, shape "
+                    f"{self._starts.shape}, got {levels.shape}"
+                )
         if self._t_s is not None and not t_s > self._t_s:
             raise ValueError(f"ZoneTracker.update t_s: must increase, got {t_s} after {self._t_s}")
         t_s = float(t_s)
-        same_levels = levels is self._levels_array
         if same_levels:  # the same read-only levels (``LampStates``): listed already
             level_list = self._levels
         else:
