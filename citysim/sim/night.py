@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 #: Streams split off the scenario seed, in this order; never reorder (results would change).
 STREAMS = ("traffic", "world", "render", "control", "network")
 
-StepHook = Callable[[float, list[AgentState]], None]
+StepHook = Callable[[float, Sequence[AgentState]], None]
 
 
 class AgentSource(Protocol):
@@ -45,9 +45,9 @@ class AgentSource(Protocol):
 
     spawned_count: int  # agents that had entered the street by the latest step
 
-    def next_step(self) -> list[AgentState]: ...
+    def next_step(self) -> Sequence[AgentState]: ...
 
-    def rows_of(self, agents: list[AgentState]) -> tuple[AgentColumns, int] | None:
+    def rows_of(self, agents: Sequence[AgentState]) -> tuple[AgentColumns, int] | None:
         """The recording's columns holding the latest step's ``agents`` and their first row (None:
         ``agents`` is not that step's list)."""
 
@@ -68,7 +68,7 @@ class Night:
     world: World
     env: simpy.Environment
     #: the agents after the latest physics step (empty before the first)
-    agents: list[AgentState] = field(default_factory=list)
+    agents: Sequence[AgentState] = field(default_factory=list)
     _camera_streams: list[np.random.Generator] | None = None
     #: the recorded agents replayed instead of stepping ``world`` (None: step it)
     replay: AgentSource | None = None

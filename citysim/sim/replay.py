@@ -10,9 +10,11 @@ once and handing the snapshots to every controller gives them bit for bit the sa
 agent snapshots as chunk files of ``CHUNK_STEPS`` physics steps, each written whole and then
 renamed into place, so a reader in another process sees a chunk complete or not at all.
 ``TrafficReplay(folder)`` reads them back, in step order, waiting for a chunk the recorder has
-not written yet (the recorder runs beside the first controllers of a parallel comparison);
-``rows_of`` gives the chunk's agents as columns too, for those who compute over every step of a
-chunk in one numpy pass (fast mode's candidates).
+not written yet (the recorder runs beside the first controllers of a parallel comparison). Each
+step's agents are a ``citysim.sim.recorded.RecordedAgents``, whose snapshots are made when first
+read; its ``chunk`` (and ``rows_of``) gives the chunk's agents as columns too, for those who
+compute over every step of a chunk in one numpy pass (the metrics, the oracle, fast mode's
+candidates).
 
 A chunk holds compact arrays, not objects: per step the number of agents and the world's spawn
 count; per agent and step its object, position, heading, speed and gait phase (float64, as
