@@ -68,10 +68,13 @@ class LampBank:
 
     def __init__(self, ctx: ControlContext):
         self.ctx = ctx
-        self.lit_until_s = np.full(len(ctx.lamps), -math.inf)
-        self.first_trigger_s = np.full(len(ctx.lamps), math.nan)
-        self.last_trigger_s = np.full(len(ctx.lamps), math.nan)
-        self.triggers = np.zeros(len(ctx.lamps), dtype=np.int64)
+        # plain lists of plain floats and ints: a controller triggers lamps up to every physics step,
+        # where numpy's per-element access was most of a trigger's cost
+        n = len(ctx.lamps)
+        self.lit_until_s: list[float] = [-math.inf] * n
+        self.first_trigger_s: list[float] = [math.nan] * n
+        self.last_trigger_s: list[float] = [math.nan] * n
+        self.triggers: list[int] = [0] * n
         # no hold runs out before this time: release_expired has nothing to do until then (lamps
         # start unheld, so the first call looks at every lamp, as a lamp starting at full needs)
         self._next_expiry_s = -math.inf
@@ -80,30 +83,35 @@ class LampBank:
         self.held_dim = False
 
     def trigger(self, lamp_index: int, t_s: float, hold_s: float | None = None) -> None:
+        self.trigger_all((lamp_index,), t_s, hold_s)
+
+    def trigger_all(self, lamp_indices: Sequence[int], t_s: float, hold_s: float | None = None) -> None:
+        """``trigger`` each of ``lamp_indices`` in turn (the oracle's lamps of a physics step)."""
         if self.held_dim:
             return
-        if self.triggers[lamp_index] == 0:
-            self.first_trigger_s[lamp_index] = t_s
-        self.last_trigger_s[lamp_index] = t_s
-        self.triggers[lamp_index] += 1
         until = t_s + (self.ctx.hold_s if hold_s is None else hold_s)
-        if until > self.lit_until_s[lamp_index]:
-            self.lit_until_s[lamp_index] = until
-        self._next_expiry_s = min(self._next_expiry_s, self.lit_until_s[lamp_index])
-        lamp = self.ctx.lamps[lamp_index]
-        if lamp.target_level < 1.0:
-            lamp.set_target(t_s, 1.0)
+        triggers, lit_until_s, lamps = self.triggers, self.lit_until_s, self.ctx.lamps
+        for i in lamp_indices:
+            if triggers[i] == 0:
+                self.first_trigger_s[i] = t_s
+            self.last_trigger_s[i] = t_s
+            triggers[i] += 1
+            if until > lit_until_s[i]:
+                lit_until_s[i] = until
+            self._next_expiry_s = min(self._next_expiry_s, lit_until_s[i])
+            lamp = lamps[i]
+            if lamp.target_level < 1.0:
+                lamp.set_target(t_s, 1.0)
 
     def release_expired(self, t_s: float) -> None:
         """Called every physics step: lamps whose hold ran out go back to dim."""
         if t_s < self._next_expiry_s:
             return
-        for i in np.flatnonzero(self.lit_until_s <= t_s):
+        for i, until_s in enumerate(self.lit_until_s):
             lamp = self.ctx.lamps[i]
-            if lamp.target_level > self.ctx.dim_level:
+            if until_s <= t_s and lamp.target_level > self.ctx.dim_level:
                 lamp.set_target(t_s, self.ctx.dim_level)
-        held = self.lit_until_s[self.lit_until_s > t_s]
-        self._next_expiry_s = float(held.min()) if len(held) else math.inf
+        self._next_expiry_s = min((u for u in self.lit_until_s if u > t_s), default=math.inf)
 
 
 class Controller:

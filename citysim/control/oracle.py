@@ -15,8 +15,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from citysim.config.kinds import TARGET_KINDS
 from citysim.control.base import ControlContext, Controller
 from citysim.world.agents import AgentState
+
+#: a step's needed zones are a bitmask in an int64 (bit j: zone j): up to this many zones
+MAX_MASK_ZONES = 62
 
 
 class Oracle(Controller):
@@ -31,6 +35,9 @@ class Oracle(Controller):
         lum = ctx.luminaire
         # dim -> full takes (1 - dim) of a full swing; two physics steps of margin at 30 Hz
         self.lead_s = (1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 / 30.0
+        # replayed steps (``citysim.sim.recorded``): each step's zones needed, one numpy pass a chunk
+        self._by_chunk = len(self.zone_start_m) <= MAX_MASK_ZONES
+        self._needed_chunk: tuple[object, list[list[int]]] | None = None
 
     def zones_needed(self, agents: Sequence[AgentState]) -> np.ndarray:
         """Indices of the zones a target is in, or enters within ``lead_s`` at its current velocity.
@@ -42,12 +49,35 @@ class Oracle(Controller):
         if not targets:
             return np.zeros(0, dtype=np.int64)
         x_m = np.array([a.x_m for a in targets])
-        ahead_m = np.array([a.speed_mps * math.cos(a.heading_rad) for a in targets]) * self.lead_s
+        speed_mps = [a.speed_mps for a in targets]
+        return np.flatnonzero(self._touching(x_m, speed_mps, [a.heading_rad for a in targets]).any(axis=0))
+
+    def _touching(self, x_m: np.ndarray, speed_mps: list[float], heading_rad: list[float]) -> np.ndarray:
+        """(targets, zones): whether the zone holds a point between each target and where its
+        velocity takes it in ``lead_s``."""
+        ahead_m = np.array([v * math.cos(h) for v, h in zip(speed_mps, heading_rad, strict=True)]) * self.lead_s
         lo_m, hi_m = np.minimum(x_m, x_m + ahead_m), np.maximum(x_m, x_m + ahead_m)
-        touching = (self.zone_start_m[:, None] <= hi_m[None, :]) & (self.zone_end_m[:, None] > lo_m[None, :])
-        return np.flatnonzero(touching.any(axis=1))
+        return (self.zone_start_m[None, :] <= hi_m[:, None]) & (self.zone_end_m[None, :] > lo_m[:, None])
+
+    def needed_by_step(self, chunk) -> list[list[int]]:
+        """Per step of a replayed ``chunk`` (``citysim.sim.recorded.RecordedChunk``): the lamps
+        ``zones_needed`` gives for its agents, computed for every row of the chunk at once."""
+        if self._needed_chunk is None or self._needed_chunk[0] is not chunk:
+            targets = np.flatnonzero(chunk.of_kinds(TARGET_KINDS))
+            touching = self._touching(chunk.column("x_m")[targets], chunk.column("speed_mps")[targets].tolist(),
+                                      chunk.column("heading_rad")[targets].tolist())  # fmt: skip
+            bits = np.left_shift(np.int64(1), np.arange(len(self.zone_start_m), dtype=np.int64))
+            masks = np.zeros(chunk.n_steps, dtype=np.int64)  # per step, bit j: zone j needed
+            np.bitwise_or.at(masks, chunk.step_of_row[targets], (touching * bits).sum(axis=1))
+            lamps = {m: [j for j in range(len(self.zone_start_m)) if m >> j & 1] for m in set(masks.tolist())}
+            self._needed_chunk = (chunk, [lamps[m] for m in masks.tolist()])
+        return self._needed_chunk[1]
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)
-        for lamp_index in self.zones_needed(agents):
-            self.bank.trigger(int(lamp_index), t_s)
+        chunk = getattr(agents, "chunk", None)  # a replayed step's agents carry their chunk
+        if chunk is not None and self._by_chunk:
+            needed = self.needed_by_step(chunk)[agents.step]
+        else:
+            needed = self.zones_needed(agents).tolist()
+        self.bank.trigger_all(needed, t_s)

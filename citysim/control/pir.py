@@ -40,7 +40,12 @@ class PassiveInfrared(Controller):
         if t_s < self.next_sample_s or not agents:
             return
         self.next_sample_s = t_s + self.period_s
-        xy = np.array([[a.x_m, a.y_m] for a in agents])
+        chunk = getattr(agents, "chunk", None)  # a replayed step's agents carry their chunk
+        if chunk is None:
+            xy = np.array([[a.x_m, a.y_m] for a in agents])
+        else:  # the step's rows of the chunk's columns: the same numbers, no agent's snapshot made
+            rows = slice(agents.first, agents.first + len(agents))
+            xy = np.stack([chunk.column("x_m")[rows], chunk.column("y_m")[rows]], axis=1)
         rel = xy[None, :, :] - self.pole_xy_m[:, None, :]  # lamps x agents x 2
         dist = np.linalg.norm(rel, axis=2)
         cos_angle = np.einsum("lak,lk->la", rel, self.heading) / np.maximum(dist, 1e-9)

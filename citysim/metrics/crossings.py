@@ -32,7 +32,7 @@ class CrossingsCollector(Collector):
         self.label, self.writer = label, writer
 
     def _write_rows(self) -> None:
-        if self.writer is None:
+        if self.writer is None or not self.zones.has_rows:
             return
         for row in self.zones.rows(drain=True):
             self.writer.writerow([

@@ -32,6 +32,8 @@ import numpy as np
 from citysim.config.kinds import AGENT_KINDS, TARGET_KINDS
 from citysim.control.lamps import check_number
 from citysim.metrics.quantiles import QuantileSketch
+from citysim.metrics.spans import intersect, nonneg_span, pos_span
+from citysim.metrics.zone_rows import RecordedZones
 from citysim.world.agents import AgentState
 from citysim.world.street import Street
 
@@ -43,35 +45,6 @@ from citysim.world.street import Street
 DEFAULT_LOOKAHEAD_S = {name: AGENT_KINDS[name].lookahead_s for name in TARGET_KINDS}
 
 _LEVEL_TOL = 1e-9  # a ramp that ends exactly at the required level counts as reaching it
-
-
-def _nonneg_span(a0: float, a1: float) -> tuple[float, float] | None:
-    """Where the line from a0 (tau=0) to a1 (tau=1) is >= 0, as a tau interval in [0, 1]."""
-    if a0 >= 0.0 and a1 >= 0.0:
-        return 0.0, 1.0
-    if a0 < 0.0 and a1 < 0.0:
-        return None
-    root = a0 / (a0 - a1)
-    return (0.0, root) if a0 >= 0.0 else (root, 1.0)
-
-
-def _pos_span(a0: float, a1: float) -> tuple[float, float] | None:
-    """Where the line from a0 to a1 is > 0 (zones are half-open at their end)."""
-    if a0 > 0.0 and a1 > 0.0:
-        return 0.0, 1.0
-    if a0 <= 0.0 and a1 <= 0.0:
-        return None
-    root = a0 / (a0 - a1)
-    return (0.0, root) if a0 > 0.0 else (root, 1.0)
-
-
-def _intersect(
-    a: tuple[float, float] | None, b: tuple[float, float] | None
-) -> tuple[float, float] | None:
-    if a is None or b is None:
-        return None
-    lo, hi = max(a[0], b[0]), min(a[1], b[1])
-    return (lo, hi) if lo <= hi else None
 
 
 @dataclass
@@ -139,6 +112,7 @@ class ZoneTracker:
         self._disjoint = self._order is not None and all(
             end <= start for end, start in zip(self._sorted_ends[:-1], self._sorted_starts[1:], strict=True)
         )
+        self._recorded = self._short_path()
         self._t_s: float | None = None
         self._levels: list[float] | None = None
         self._levels_array: np.ndarray | None = None  # the read-only array ``_levels`` was listed from
@@ -149,6 +123,16 @@ class ZoneTracker:
         self._counts = {
             c: {"visits": 0, "unlit_crossings": 0, "lit_on_entry": 0} for c in self.required_level
         }
+
+    def _short_path(self) -> RecordedZones | None:
+        """The short path of replayed steps (``citysim.metrics.zone_rows``) where it holds: disjoint
+        zones, one required level, no look-ahead."""
+        reqs = set(self.required_level.values())
+        if not self._disjoint or len(reqs) != 1 or any(self.lookahead_s.get(c, 0.0) for c in self.required_level):
+            return None
+        req = reqs.pop()
+        return RecordedZones(self.required_level, self._starts[self._order], self._ends[self._order], self._order,
+                             lambda level: level - req + _LEVEL_TOL >= 0.0)  # ``_stays_in_zone``'s test  # fmt: skip
 
     # ------------------------------------------------------------------ stepping
     def _need_span(self, agent: AgentState) -> tuple[float, float]:
@@ -171,41 +155,56 @@ class ZoneTracker:
 
         ``levels``: one visible-light level (0..1) per ``street.lamps`` entry at ``t_s``.
         """
-        levels = np.asarray(levels, dtype=float)
-        if levels.shape != self._starts.shape:
-            raise ValueError(
-                f"ZoneTracker.update levels: need one level per street lamp, shape "
-                f"{self._starts.shape}, got {levels.shape}"
-            )
+        same_levels = levels is self._levels_array
+        if not same_levels:  # (the same read-only levels as before were checked then)
+            levels = np.asarray(levels, dtype=float)
+            if levels.shape != self._starts.shape:
+                raise ValueError(
+                    f"ZoneTracker.update levels: need one level per street lamp, shape "
+                    f"{self._starts.shape}, got {levels.shape}"
+                )
         if self._t_s is not None and not t_s > self._t_s:
             raise ValueError(f"ZoneTracker.update t_s: must increase, got {t_s} after {self._t_s}")
         t_s = float(t_s)
-        if levels is self._levels_array:  # the same read-only levels (``LampStates``): listed already
+        if same_levels:  # the same read-only levels (``LampStates``): listed already
             level_list = self._levels
         else:
             level_list = levels.tolist()
             self._levels_array = None if levels.flags.writeable else levels
-        if not agents and not self._tracks:  # nobody in the street, nobody to retire
-            self._t_s, self._levels = t_s, level_list
+        recorded = None if self._recorded is None else self._recorded.step_of(agents)
+        if recorded is not None and self._recorded.skip(self._tracks, recorded, self._t_s, t_s, levels, same_levels):
+            self._t_s = t_s
             return
+        if self._recorded is not None:  # the long path reads the tracks' spans of the steps skipped
+            self._recorded.give_spans(self._tracks)
+        if agents or self._tracks:  # else nobody in the street, nobody to retire
+            if recorded is None:
+                spans = ((a.object_id, a.cls, *self._need_span(a)) for a in agents)
+            else:  # a replayed step's rows: no agent's snapshot is made
+                spans = self._recorded.spans(recorded)
+            self._step_all(t_s, spans, level_list)
+        if recorded is not None:
+            self._recorded.after_long_path(self._tracks, recorded, level_list)
+        self._t_s = t_s
+        self._levels = level_list
+
+    def _step_all(self, t_s: float, spans, level_list: list[float]) -> None:
+        """Every object's step; ``spans``: (object id, class, span low, span high) of each agent."""
         seen: set[int] = set()
-        for agent in agents:
-            req = self.required_level.get(agent.cls)
+        for object_id, cls, lo1, hi1 in spans:
+            req = self.required_level.get(cls)
             if req is None:
                 continue
-            seen.add(agent.object_id)
-            lo1, hi1 = self._need_span(agent)
-            track = self._tracks.get(agent.object_id)
+            seen.add(object_id)
+            track = self._tracks.get(object_id)
             if track is None or self._t_s is None:
-                self._tracks[agent.object_id] = track = _Track(agent.cls, lo1, hi1, {})
-                self._step_object(track, agent.object_id, req, self._t_s, t_s, level_list)
+                self._tracks[object_id] = track = _Track(cls, lo1, hi1, {})
+                self._step_object(track, object_id, req, self._t_s, t_s, level_list)
             elif not self._stays_in_zone(track, req, t_s - self._t_s, level_list, lo1, hi1):
-                self._step_object(track, agent.object_id, req, self._t_s, t_s, level_list, lo1, hi1)
+                self._step_object(track, object_id, req, self._t_s, t_s, level_list, lo1, hi1)
             track.lo_m, track.hi_m = lo1, hi1
         for object_id in [i for i in self._tracks if i not in seen]:
             self._retire(object_id, self._t_s)
-        self._t_s = float(t_s)
-        self._levels = level_list
 
     def _stays_in_zone(
         self, track: _Track, req: float, dt_s: float, levels1: list[float], lo1_m: float, hi1_m: float
@@ -257,9 +256,9 @@ class ZoneTracker:
         candidates = set(self._zones_touching(min(lo0, lo1_m), max(hi0, hi1_m)))
         dark_spans: list[tuple[float, float]] = []
         for j in sorted(candidates | set(track.visits)):
-            inside = _intersect(
-                _nonneg_span(hi0 - self._start_m[j], hi1_m - self._start_m[j]),
-                _pos_span(self._end_m[j] - lo0, self._end_m[j] - lo1_m),
+            inside = intersect(
+                nonneg_span(hi0 - self._start_m[j], hi1_m - self._start_m[j]),
+                pos_span(self._end_m[j] - lo0, self._end_m[j] - lo1_m),
             )
             visit = track.visits.get(j)
             if visit is not None and (inside is None or inside[0] > 0.0):
@@ -268,14 +267,14 @@ class ZoneTracker:
             if inside is None:
                 continue
             l0, l1 = self._levels[j], levels1[j]
-            lit = _nonneg_span(l0 - req + _LEVEL_TOL, l1 - req + _LEVEL_TOL)
+            lit = nonneg_span(l0 - req + _LEVEL_TOL, l1 - req + _LEVEL_TOL)
             if visit is None:
                 t_enter = t0_s + inside[0] * dt_s
                 level_in = l0 + (l1 - l0) * inside[0]
                 on_entry = level_in >= req - _LEVEL_TOL
                 visit = track.visits[j] = _Visit(t_enter, on_entry, t_enter if on_entry else None)
                 track.n_visits += 1
-            lit_inside = _intersect(inside, lit)
+            lit_inside = intersect(inside, lit)
             if visit.t_lit_s is None and lit_inside is not None:
                 visit.t_lit_s = t0_s + lit_inside[0] * dt_s
             lit_len = 0.0 if lit_inside is None else lit_inside[1] - lit_inside[0]
@@ -344,6 +343,11 @@ class ZoneTracker:
             self._retire(object_id, self._t_s, completed=False)
 
     # ------------------------------------------------------------------ output
+    @property
+    def has_rows(self) -> bool:
+        """Whether ``rows`` has a completed visit to give (asked every step)."""
+        return bool(self._done)
+
     def rows(self, drain: bool = True) -> Iterator[dict[str, Any]]:
         """Completed visits, oldest first (objects.csv rows). ``drain`` drops them as they are read."""
         if not drain:

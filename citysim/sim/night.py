@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 #: Streams split off the scenario seed, in this order; never reorder (results would change).
 STREAMS = ("traffic", "world", "render", "control", "network")
 
-StepHook = Callable[[float, list[AgentState]], None]
+StepHook = Callable[[float, Sequence[AgentState]], None]
 
 
 class AgentSource(Protocol):
@@ -45,9 +45,9 @@ class AgentSource(Protocol):
 
     spawned_count: int  # agents that had entered the street by the latest step
 
-    def next_step(self) -> list[AgentState]: ...
+    def next_step(self) -> Sequence[AgentState]: ...
 
-    def rows_of(self, agents: list[AgentState]) -> tuple[AgentColumns, int] | None:
+    def rows_of(self, agents: Sequence[AgentState]) -> tuple[AgentColumns, int] | None:
         """The recording's columns holding the latest step's ``agents`` and their first row (None:
         ``agents`` is not that step's list)."""
 
@@ -68,10 +68,13 @@ class Night:
     world: World
     env: simpy.Environment
     #: the agents after the latest physics step (empty before the first)
-    agents: list[AgentState] = field(default_factory=list)
+    agents: Sequence[AgentState] = field(default_factory=list)
     _camera_streams: list[np.random.Generator] | None = None
     #: the recorded agents replayed instead of stepping ``world`` (None: step it)
     replay: AgentSource | None = None
+    #: run a physics step at once when no other event of the clock comes before it (``_physics``);
+    #: False: every step waits on its own timeout (the same steps at the same times, in the same order)
+    skip_idle_clock: bool = True
 
     @property
     def physics_dt_s(self) -> float:
@@ -92,11 +95,21 @@ class Night:
 
     def _physics(self, on_step: StepHook | None):
         dt_s = self.physics_dt_s
+        env = self.env
         k = 0
         while True:
             k += 1
             # scheduled at k * dt from the start, so steps do not drift with float sums
-            yield self.env.timeout(max(0.0, k * dt_s - self.env.now))
+            now_s = env.now
+            delay_s = max(0.0, k * dt_s - now_s)
+            if self.skip_idle_clock and env.peek() > now_s + delay_s:
+                # no event is due before this step (not even the end of ``run_until``): waiting on
+                # the clock would only pop this step's own timeout, at the time simpy would give it
+                # (``Environment.schedule``: now + delay). A night whose other processes sleep
+                # between whole seconds so runs most steps without simpy's event machinery.
+                env._now = now_s + delay_s
+            else:
+                yield env.timeout(delay_s)
             if self.replay is None:
                 self.world.step(dt_s)
                 self.agents = self.world.states()

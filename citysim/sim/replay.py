@@ -10,9 +10,11 @@ once and handing the snapshots to every controller gives them bit for bit the sa
 agent snapshots as chunk files of ``CHUNK_STEPS`` physics steps, each written whole and then
 renamed into place, so a reader in another process sees a chunk complete or not at all.
 ``TrafficReplay(folder)`` reads them back, in step order, waiting for a chunk the recorder has
-not written yet (the recorder runs beside the first controllers of a parallel comparison);
-``rows_of`` gives the chunk's agents as columns too, for those who compute over every step of a
-chunk in one numpy pass (fast mode's candidates).
+not written yet (the recorder runs beside the first controllers of a parallel comparison). Each
+step's agents are a ``citysim.sim.recorded.RecordedAgents``, whose snapshots are made when first
+read; its ``chunk`` (and ``rows_of``) gives the chunk's agents as columns too, for those who
+compute over every step of a chunk in one numpy pass (the metrics, the oracle, fast mode's
+candidates).
 
 A chunk holds compact arrays, not objects: per step the number of agents and the world's spawn
 count; per agent and step its object, position, heading, speed and gait phase (float64, as
@@ -25,7 +27,7 @@ from __future__ import annotations
 import os
 import pickle
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,12 +35,11 @@ import numpy as np
 
 from citysim.config.scenario import Scenario
 from citysim.sim.night import build_night
-from citysim.world.agents import AgentColumns, AgentState, MemberState, frozen_from_fields
+from citysim.sim.recorded import DYNAMIC_COLUMNS, RecordedAgents, RecordedChunk
+from citysim.world.agents import AgentColumns, AgentState
 
 #: physics steps per chunk file (60 s at 30 Hz): small enough to stream, few enough files
 CHUNK_STEPS = 1800
-#: the columns of a chunk's per-agent rows
-DYNAMIC_COLUMNS = ("x_m", "y_m", "heading_rad", "speed_mps", "gait_phase_rad")
 _DONE = "done.pkl"
 _FAILED = "failed.txt"
 
@@ -166,11 +167,9 @@ class TrafficReplay:
         self.looks: dict[int, _Looks] = {}
         self.spawned_count = 0
         self._chunk_index = -1
-        self._steps: list[tuple[int, int, int, int]] = []  # per step: first row, rows, first member phase, spawned
+        self._chunk: RecordedChunk | None = None
         self._step_in_chunk = 0
-        self._chunk: dict | None = None
-        self._columns: AgentColumns | None = None  # the current chunk's, made on first ask
-        self._latest: tuple[list[AgentState], int] = ([], 0)  # the latest step's agents and first row
+        self._latest: RecordedAgents | None = None  # the latest step's agents
 
     def _load(self, index: int) -> None:
         path = self.folder / f"chunk_{index:06d}.pkl"
@@ -187,61 +186,27 @@ class TrafficReplay:
             chunk = pickle.load(fh)
         for looks in chunk["looks"]:
             self.looks[looks.object_id] = looks
-        # where each step's rows and member phases start
-        counts = chunk["counts"].tolist()
-        objects = chunk["objects"].tolist()
-        steps, row, member = [], 0, 0
-        for n, spawned in zip(counts, chunk["spawned"].tolist(), strict=True):
-            steps.append((row, n, member, spawned))
-            member += sum(len(self.looks[oid].members) for oid in objects[row : row + n])
-            row += n
-        chunk["objects"], chunk["row_array"], chunk["rows"] = objects, chunk["rows"], chunk["rows"].tolist()
-        chunk["member_phases"] = chunk["member_phases"].tolist()
-        self._chunk, self._steps, self._step_in_chunk, self._chunk_index = chunk, steps, 0, index
-        self._columns = None
+        self._chunk, self._step_in_chunk, self._chunk_index = RecordedChunk(chunk, self.looks), 0, index
 
-    def next_step(self) -> list[AgentState]:
-        """The agents after the next physics step (the world's ``states()`` then), bit for bit."""
-        if self._chunk is None or self._step_in_chunk == len(self._steps):
+    def next_step(self) -> RecordedAgents:
+        """The agents after the next physics step (the world's ``states()`` then), bit for bit; their
+        snapshots are made when first read (``citysim.sim.recorded``)."""
+        if self._chunk is None or self._step_in_chunk == self._chunk.n_steps:
             self._load(self._chunk_index + 1)
-        first, n, member, self.spawned_count = self._steps[self._step_in_chunk]
+        step = self._step_in_chunk
         self._step_in_chunk += 1
-        if not n:  # an empty street, most steps of a quiet hour
-            self._latest = ([], first)
-            return self._latest[0]
-        chunk = self._chunk
-        out = []
-        for oid, (x, y, heading, speed, phase) in zip(
-            chunk["objects"][first : first + n], chunk["rows"][first : first + n], strict=True
-        ):
-            looks = self.looks[oid]
-            members = ()
-            if looks.members:
-                phases = chunk["member_phases"][member : member + len(looks.members)]
-                member += len(looks.members)
-                members = tuple(MemberState(*m, p) for m, p in zip(looks.members, phases, strict=True))
-            out.append(frozen_from_fields(AgentState, {"object_id": oid, "cls": looks.cls, "x_m": x, "y_m": y, "heading_rad": heading,
-                                     "speed_mps": speed, "length_m": looks.length_m, "width_m": looks.width_m,
-                                     "height_m": looks.height_m, "gait_phase_rad": phase, "members": members,
-                                     "light_on": looks.light_on}))  # fmt: skip
-        self._latest = (out, first)
-        return out
+        self.spawned_count = self._chunk.spawned[step]
+        self._latest = RecordedAgents(self._chunk, step)
+        return self._latest
 
-    def rows_of(self, agents: list[AgentState]) -> tuple[AgentColumns, int] | None:
+    def rows_of(self, agents: Sequence[AgentState]) -> tuple[AgentColumns, int] | None:
         """The current chunk's agents as columns and the first row of ``agents``, when ``agents`` is
-        the list the latest ``next_step`` gave (its agents are the ``len(agents)`` rows from there,
-        the same numbers); else None."""
-        latest, first = self._latest
-        if agents is not latest or self._chunk is None:
+        the sequence the latest ``next_step`` gave (its agents are the ``len(agents)`` rows from
+        there, the same numbers); else None."""
+        latest = self._latest
+        if agents is not latest or latest is None:
             return None
-        if self._columns is None:
-            chunk = self._chunk
-            rows, looks = chunk["row_array"], [self.looks[oid] for oid in chunk["objects"]]
-            x_m, y_m, heading_rad, speed_mps = (np.ascontiguousarray(rows[:, DYNAMIC_COLUMNS.index(name)])
-                                                for name in ("x_m", "y_m", "heading_rad", "speed_mps"))
-            self._columns = AgentColumns(x_m, y_m, heading_rad, speed_mps, tuple(lk.cls for lk in looks),
-                                         np.array([lk.light_on for lk in looks], dtype=bool))  # fmt: skip
-        return self._columns, first
+        return latest.chunk.columns, latest.first
 
 
 def recorded_steps(folder: Path) -> int:

@@ -59,7 +59,7 @@ def test_replayed_traffic_is_the_stepped_world_bit_for_bit(tmp_path, monkeypatch
     # AgentState is a frozen dataclass: == compares every float exactly, members included
     for (t_live, a_live, n_live), (t_rep, a_rep, n_rep) in zip(live, replayed, strict=True):
         assert t_live == t_rep and n_live == n_rep
-        assert a_live == a_rep
+        assert a_live == list(a_rep)
         assert [vars(a) for a in a_live] == [vars(a) for a in a_rep]  # the same fields, none more
 
 
