@@ -89,11 +89,13 @@ class Night:
     def n_lamps(self) -> int:
         return len(self.street.lamps)
 
-    def start_physics(self, on_step: StepHook | None = None) -> None:
-        """Step the world at ``physics_hz`` from t = 0; ``on_step(t_s, agents)`` after each step."""
-        self.env.process(self._physics(on_step))
+    def start_physics(self, on_step: StepHook | None = None, snapshots: bool = True) -> None:
+        """Step the world at ``physics_hz`` from t = 0; ``on_step(t_s, agents)`` after each step.
+        ``snapshots`` False: the stepped world's agents are not made into snapshots (``agents``
+        stays empty; the traffic recorder reads ``World.snapshot_rows`` instead)."""
+        self.env.process(self._physics(on_step, snapshots))
 
-    def _physics(self, on_step: StepHook | None):
+    def _physics(self, on_step: StepHook | None, snapshots: bool = True):
         dt_s = self.physics_dt_s
         env = self.env
         k = 0
@@ -112,7 +114,8 @@ class Night:
                 yield env.timeout(delay_s)
             if self.replay is None:
                 self.world.step(dt_s)
-                self.agents = self.world.states()
+                if snapshots:
+                    self.agents = self.world.states()
             else:
                 self.agents = self.replay.next_step()
             if on_step is not None:

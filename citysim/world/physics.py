@@ -132,6 +132,23 @@ class World:
             }))  # fmt: skip
         return out
 
+    def snapshot_rows(self) -> tuple[list[int], list[tuple[float, float, float, float, float]], list[float]]:
+        """What of ``states()`` changes from step to step, without building the snapshots (the
+        traffic recorder's rows): the agents' object ids in order of entry, their (x_m, y_m,
+        heading_rad, speed_mps, gait_phase_rad), and their group members' gait phases in the same
+        order; the same values as ``states()`` gives, computed by the same expressions."""
+        if not self._movers:
+            return [], [], []
+        oids, rows, member_phases = [], [], []
+        poses = self._state[:, : PHASE + 1].tolist()
+        velocities = self._vu[VEL].tolist()
+        for a, (x, y, th, phase), (vx, vy) in zip(self._movers, poses, velocities, strict=True):
+            oids.append(a.oid)
+            rows.append((x, y, (th + math.pi) % TWO_PI - math.pi, math.hypot(vx, vy), phase))
+            if a.traits.members:
+                member_phases.extend(a.member_phases)
+        return oids, rows, member_phases
+
     # --------------------------------------------------------------- admission
     def _admit(self) -> None:
         """Let the head of each entry queue in if its footprint and a minimal gap ahead are free."""
