@@ -112,8 +112,10 @@ def reproduce(
     *,
     quick: bool = False,
     progress: bool = True,
+    full_frame: bool = False,
 ) -> Reproduction:
-    """Film, score and report; returns everything written (see the module docstring)."""
+    """Film, score and report; returns everything written (see the module docstring).
+    ``full_frame``: the detector segments whole frames (``film_scene``)."""
     unknown = [k for k in scene_keys if k not in PAPER_SCENES]
     if unknown:
         raise ValueError(f"scenes: unknown {unknown}; valid: {', '.join(PAPER_SCENES)}")
@@ -129,7 +131,7 @@ def reproduce(
     with tqdm(total=total, unit="frame", desc="paper scenes", disable=not progress) as bar:
         for scene in scenes:
             bar.set_postfix_str(f"scene {scene.key}")
-            per_scene[scene.key] = film_scene(scene, budget, on_frame=bar.update)
+            per_scene[scene.key] = film_scene(scene, budget, on_frame=bar.update, full_frame=full_frame)
     scene_results = {}
     for s in scenes:
         cam = s.load().lamps.camera_model
@@ -175,11 +177,13 @@ def main(argv: list[str] | None = None) -> int:
         help=f"paper scenes to film (default: all of {' '.join(PAPER_SCENES)})",
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--full-frame", action="store_true",
+                        help="segment whole frames, not the band where a target within range can appear")
     args = parser.parse_args(argv)
     out = args.out or (RESULTS_DIR / "quick" if args.quick else RESULTS_DIR)
     try:
         result = reproduce(out, QUICK_BUDGET if args.quick else FULL_BUDGET, tuple(args.scenes),
-                           quick=args.quick, progress=not args.no_progress)  # fmt: skip
+                           quick=args.quick, progress=not args.no_progress, full_frame=args.full_frame)  # fmt: skip
     except ValueError as exc:
         print(f"reproduce_paper: {exc}", file=sys.stderr)
         return 2

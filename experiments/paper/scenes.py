@@ -274,8 +274,11 @@ def film_scene(
     scene: PaperScene,
     budget: Budget,
     on_frame: Callable[[], None] | None = None,
+    full_frame: bool = False,
 ) -> SceneRecords:
-    """Film and score ``scene`` (see the module docstring); ``on_frame`` is called per camera frame."""
+    """Film and score ``scene`` (see the module docstring); ``on_frame`` is called per camera frame.
+    ``full_frame``: the detector segments the whole frame, not the band where a target within
+    range can appear (``detector.roi``; the comparison that shows the band loses nothing)."""
     scenario = scene.load()
     night = build_night(scenario)
     for lamp in scene.cameras:
@@ -288,7 +291,7 @@ def film_scene(
     model = default_model()
     renderers = night.renderers(scene.cameras)
     cams = [r.camera for r in renderers]
-    detectors = [Detector(c, model=model, max_distance_m=scene.range_m) for c in cams]
+    detectors = [Detector(c, model=model, max_distance_m=scene.range_m, crop_to_range=not full_frame) for c in cams]
     levels = np.full(night.n_lamps, scenario.lamps.luminaire.dim_level)
 
     def advance(t_s: float) -> None:
