@@ -152,6 +152,19 @@ def test_film_scene_is_repeatable():
     assert a.noise_area_frac == b.noise_area_frac
 
 
+def test_full_frame_scores_the_targets_the_band_scores():
+    """The detector's band (``detector.roi``) loses no target within range: scene A's rows of road
+    users, detected or missed and with which probabilities, are the same on whole frames."""
+    budget = Budget(preroll_s=20.0, warmup_s=0.4, scored_s=1.6)
+    band, whole = (film_scene(PAPER_SCENES["A"], budget, full_frame=f) for f in (False, True))
+
+    def target_rows(records):
+        return [(c, d, p.tolist()) for c, d, p in zip(records.truth_cls, records.detected, records.probabilities, strict=True)
+                if c != "noise"]  # fmt: skip
+
+    assert target_rows(band) and target_rows(band) == target_rows(whole)
+
+
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("paper")
