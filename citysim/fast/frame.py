@@ -67,7 +67,11 @@ class SensedFrame:
     def truth(self) -> tuple:
         if self._truth is None:
             s, i = self.sensors, self.lamp_index
-            idx = s.candidates_of(i).tolist()
-            self._truth = tuple(SensedTruth(s, i, j, bool(s.cand.forward_m[j, i] <= DETECTOR_RANGE_M)) for j in idx) \
-                if idx else ()  # fmt: skip
+            if not s.agents or not s.pairs("seen").count(i):
+                self._truth = ()
+            else:  # the camera's candidates and their forward distances, from the step's lists
+                inputs = s.draw_inputs()
+                first, end = inputs.pairs.bounds(i)
+                self._truth = tuple(SensedTruth(s, i, j, forward_m <= DETECTOR_RANGE_M) for j, forward_m
+                                    in zip(inputs.pairs.agent_list[first:end], inputs.forward_m[first:end]))  # fmt: skip
         return self._truth

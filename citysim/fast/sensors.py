@@ -14,12 +14,13 @@ judged, so a seed gives the same detections bit for bit.
 
 from __future__ import annotations
 
+import bisect
 import math
-from collections import deque
 
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
+from citysim.fast.drawn import SensedTracker, drawn_detection
 from citysim.fast.frame import SensedFrame
 from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
@@ -33,13 +34,12 @@ from citysim.fast.model import (
     threshold_conditions,
     threshold_key,
 )
+from citysim.fast.pairs import CandidatePairs, PairDrawInputs
 from citysim.fast.records import is_young
 from citysim.fast.steps import StepGeometries
 from detector.detector import Detection
 from detector.segment import SegmenterParams
 
-#: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
-DRAWN_P_TARGET = 0.9
 _NO_INDICES = np.zeros(0, np.int64)
 _NO_LIGHT = np.zeros(0, np.float64)
 #: A hit standing more than this ahead of its road user (m) is its light's patch, not its body.
@@ -60,7 +60,7 @@ class FastSensors:
         self.fps = fps
         self.p_hit = model.p_hit_array()
         self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
-        self.class_cdf = {k: np.cumsum(v) for k, v in model.class_given_hit.items()}
+        self.class_cdf = {k: np.cumsum(v).tolist() for k, v in model.class_given_hit.items()}
         self.area_samples = {k: np.sort(np.asarray(v, dtype=np.float64)) for k, v in model.area_fraction.items()}
         self._samples_by_key: dict[tuple, np.ndarray | None] = {}
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
@@ -76,10 +76,10 @@ class FastSensors:
         self.cand = self.step.cand
         self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
-        #: per ``cand`` matrix ("seen", "beam_seen"), this step: the agents it marks, camera by camera,
-        #: and where each camera's start in them (``_indices_seen``)
-        self._seen_by_camera: dict[str, tuple[np.ndarray, list[int]]] = {}
-        self._camera_bounds = np.arange(self.geometry.n + 1)
+        #: per ``cand`` matrix ("seen", "beam_seen"), this step: the pairs it marks, camera by camera
+        self._pairs: dict[str, CandidatePairs] = {}
+        self._draw_inputs: PairDrawInputs | None = None  # this step's, of the "seen" pairs
+        self._pair_p: list[list[float]] | None = None  # this frame's p_hit of the "seen" pairs
         self._awake: list[bool] | None = None
         self._lit_cells: np.ndarray | None = None
         self._lamps_lit: list[int] | None = None  # ``lit`` of every lamp this frame, on first ask
@@ -102,7 +102,8 @@ class FastSensors:
                 self.cand = self.step.cand
             self.agents = agents
             self._boxes = {}
-            self._seen_by_camera = {}
+            self._pairs = {}
+            self._draw_inputs = None
             self._awake = None
         self.levels = levels
         if self.changes is not None:
@@ -112,6 +113,7 @@ class FastSensors:
         else:
             self.light = _NO_LIGHT
         self._lit_cells = None
+        self._pair_p = None
         self._lamps_lit = None
 
     def awake_cameras(self) -> list[bool]:
@@ -129,16 +131,34 @@ class FastSensors:
         return self._indices_seen("beam_seen", lamp_index)
 
     def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
-        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index``: every camera's found in
-        one pass once a step (the detector and the segmenter of each judged frame both ask)."""
+        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index`` (ascending)."""
         if not self.agents:
             return _NO_INDICES
-        seen = self._seen_by_camera.get(matrix)
-        if seen is None:  # the marks camera by camera, each camera's agents in ascending order
-            cameras, agents = np.nonzero(getattr(self.cand, matrix).T)
-            seen = self._seen_by_camera[matrix] = (agents, np.searchsorted(cameras, self._camera_bounds).tolist())
-        agents, starts = seen
-        return agents[starts[lamp_index] : starts[lamp_index + 1]]
+        return self.pairs(matrix).of(lamp_index)
+
+    def pairs(self, matrix: str) -> CandidatePairs:
+        """The (agent, camera) pairs ``cand.<matrix>`` marks this step: every camera's found in one
+        pass once a step (the detector and the segmenter of each judged frame both ask)."""
+        pairs = self._pairs.get(matrix)
+        if pairs is None:
+            pairs = self._pairs[matrix] = CandidatePairs(getattr(self.cand, matrix), self.geometry.n)
+        return pairs
+
+    def draw_inputs(self) -> PairDrawInputs:
+        """This step's ``PairDrawInputs`` of the candidates ("seen" pairs) of every camera."""
+        if self._draw_inputs is None:
+            self._draw_inputs = PairDrawInputs(self.pairs("seen"), self.cand.forward_m)
+        return self._draw_inputs
+
+    def candidate_draws(self) -> tuple[PairDrawInputs, list[list[float]]]:
+        """What the hit draws of this frame's candidates read, for every camera's at once: the
+        step's ``draw_inputs`` and, per pair, ``p_hit_of`` with an old and a young background."""
+        inputs = self.draw_inputs()
+        if self._pair_p is None:
+            if self._lit_cells is None:
+                self._lit_cells = (self.light >= LIT_LEVEL).astype(np.int64)
+            self._pair_p = inputs.p_of(self.p_hit, self.step.cells, self._lit_cells)
+        return inputs, self._pair_p
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
         """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
@@ -157,7 +177,9 @@ class FastSensors:
         the frame's truth is scored)."""
         key = (lamp_index, agent_index)
         if key not in self._boxes:
-            idx = self.candidates_of(lamp_index).tolist()
+            pairs = self.pairs("seen")
+            first, end = pairs.bounds(lamp_index)
+            idx = pairs.agent_list[first:end]
             if agent_index not in idx:
                 idx = [agent_index]
             for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
@@ -195,28 +217,6 @@ class _LearningRate:
         """Nothing to forget: a young background shows in the learning rate fast mode is given."""
 
 
-class SensedTracker:
-    """Per track, the last n frames' hits; confirmed at k of them (``detector.confirm.Tracker``'s
-    defaults: 2 of 6). A track unseen for more than 3 frames starts over, as a dropped one would."""
-
-    def __init__(self, k: int = 2, n: int = 6, max_missed_frames: int = 3):
-        self.k, self.n, self.max_missed = k, n, max_missed_frames
-        self.history: dict[int, tuple[int, deque]] = {}
-
-    def update(self, frame_k: int, track_id: int, hit: bool) -> None:
-        last_k, hist = self.history.get(track_id, (None, None))
-        if hist is None or frame_k - last_k > self.max_missed + 1:
-            hist = deque(maxlen=self.n)
-        hist.append(hit)
-        self.history[track_id] = (frame_k, hist)
-        if len(self.history) > 256:  # forget tracks long gone
-            self.history = {t: v for t, v in self.history.items() if frame_k - v[0] <= self.max_missed + 1}
-
-    def is_confirmed(self, track_id: int) -> bool:
-        entry = self.history.get(track_id)
-        return entry is not None and sum(entry[1]) >= self.k
-
-
 class SensedDetector:
     """One camera's detector in fast mode: per judged frame, calibrated target draws per candidate
     (a Markov chain per candidate: misses come in streaks) and false-alarm episodes."""
@@ -243,48 +243,56 @@ class SensedDetector:
 
     def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
-        idx = s.candidates_of(i)
-        detections = self._candidates(idx, k, is_young(learning_rate)) if len(idx) else []
+        seen = bool(s.agents) and s.pairs("seen").count(i) > 0
+        detections = self._candidates(k, is_young(learning_rate)) if seen else []
         beams = s.beams_of(i)
         if len(beams):
             detections += self._beams(beams, k, is_young(learning_rate))
         fa = self._false_alarm(k)
         if fa is not None:
             detections.append(fa)
-        busy = len(idx) > 0 or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]
+        busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]
         self.last_regions = (True,) if busy else ()
         return detections
 
-    def _candidates(self, idx: np.ndarray, k: int, young: bool) -> list[Detection]:
-        s, i = self.sensors, self.lamp_index
-        agents = [s.agents[j] for j in idx.tolist()]
-        kinds = np.array([KINDS.index(a.cls) for a in agents])
-        fwd = s.cand.forward_m[idx, i]
-        hits = self._chain_draws([a.object_id for a in agents], s.p_hit_of(i, idx, young), s.persistence[kinds], k)
-        out = [self._hit_detection(a, int(idx[n]), float(fwd[n]), self._drawn_class(a.cls))
+    def _candidates(self, k: int, young: bool) -> list[Detection]:
+        """Frame ``k``'s draws for the camera's candidates (``young``: its background is young)."""
+        s = self.sensors
+        inputs, pair_p = s.candidate_draws()
+        first, end = inputs.pairs.bounds(self.lamp_index)
+        idx = inputs.pairs.agent_list[first:end]
+        agents = [s.agents[j] for j in idx]
+        fwd = inputs.forward_m[first:end]
+        p = [p_old_young[young] for p_old_young in pair_p[first:end]]
+        rho = inputs.persistence_of(s.step.cells[0], s.persistence)[first:end]
+        hits = self._chain_draws([a.object_id for a in agents], p, rho, k)
+        out = [self._hit_detection(a, idx[n], fwd[n], self._drawn_class(a.cls))
                for n, a in enumerate(agents) if hits[n]]  # fmt: skip
         if len(self.previous) > 512:
             self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
         return out
 
-    def _chain_draws(self, keys: list[int], p: np.ndarray, rho: np.ndarray, k: int) -> list[bool]:
+    def _chain_draws(self, keys: list[int], p: list[float], rho: list[float], k: int) -> list[bool]:
         """Frame ``k``'s hits of the candidates ``keys`` (object or beam ids): each a two-state chain
         with the cell's P and its kind's persistence ``rho``, stepped from the last frame's draw;
-        every draw is kept for the next frame and told to the k-of-n tracker."""
+        every draw is kept for the next frame and told to the k-of-n tracker. Plain floats: the
+        same IEEE operations numpy's float64 did, a tenth of the cost on a frame's few candidates."""
+        previous = self.previous
         for n, key in enumerate(keys):
-            prev = self.previous.get(key)
+            prev = previous.get(key)
             if prev is not None and prev[0] == k - 1:  # the chain's step from the last frame's draw
                 p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
-        hits = (self.rng.random(len(keys)) < p).tolist()
+        hits = [draw < p_hit for draw, p_hit in zip(self.rng.random(len(keys)).tolist(), p, strict=True)]
+        update = self.tracker.update
         for key, hit in zip(keys, hits, strict=True):
-            self.previous[key] = (k, hit)
-            self.tracker.update(k, key, hit)
+            previous[key] = (k, hit)
+            update(k, key, hit)
         return hits
 
     def _drawn_class(self, kind: str) -> str:
         """The detector class a hit of ``kind`` is reported as, drawn from calibration's shares."""
-        cdf = self.sensors.class_cdf.get(kind)
-        return DETECTOR_CLASSES[int(np.searchsorted(cdf, self.rng.random(), side="right")) if cdf is not None else 0]
+        cdf = self.sensors.class_cdf.get(kind)  # bisect_right on a sorted list: searchsorted(side="right")
+        return DETECTOR_CLASSES[bisect.bisect_right(cdf, self.rng.random()) if cdf is not None else 0]
 
     def _hit_detection(self, agent, agent_index: int, forward_m: float, cls: str) -> Detection:
         """A hit where the real detector puts it: on the road user's body, or (a sample of how far
@@ -294,9 +302,9 @@ class SensedDetector:
         samples = s.ahead_samples.get(agent.cls)
         ahead_m = float(samples[int(self.rng.integers(len(samples)))]) if samples is not None else 0.0
         if ahead_m < AHEAD_OF_BODY_M:
-            return _detection(s.box_px(self.lamp_index, agent_index), forward_m, cls, agent.object_id)
+            return drawn_detection(s.box_px(self.lamp_index, agent_index), forward_m, cls, agent.object_id)
         box = s.geometry.beam_box_px(self.lamp_index, agent, ahead_m)
-        return _detection(box, forward_m + ahead_m, cls, agent.object_id)
+        return drawn_detection(box, forward_m + ahead_m, cls, agent.object_id)
 
     def _beams(self, idx: np.ndarray, k: int, young: bool) -> list[Detection]:
         """Draws for the beams of road users out of view (kind ``BEAM``, each its own chain and
@@ -308,8 +316,8 @@ class SensedDetector:
         cells = cell_of(np.full(len(agents), kind), fwd, s.cand.beam_bearing_rad[idx, i], light,
                         np.full(len(agents), young), np.array([a.speed_mps for a in agents]))  # fmt: skip
         keys = [beam_id(a.object_id) for a in agents]
-        hits = self._chain_draws(keys, s.p_hit[cells], np.full(len(agents), s.persistence[kind]), k)
-        return [_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), self._drawn_class(BEAM), keys[n])
+        hits = self._chain_draws(keys, s.p_hit[cells].tolist(), [float(s.persistence[kind])] * len(agents), k)
+        return [drawn_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), self._drawn_class(BEAM), keys[n])
                 for n, a in enumerate(agents) if hits[n]]  # fmt: skip
 
     def _false_alarm(self, k: int) -> Detection | None:
@@ -325,14 +333,7 @@ class SensedDetector:
         self.fa_left -= 1
         distance_m, x, y, w, h, cls = self.fa_report
         self.tracker.update(k, self.fa_track, True)
-        return _detection((int(x), int(y), int(w), int(h)), distance_m, DETECTOR_CLASSES[int(cls)], self.fa_track)
-
-
-def _detection(box_px, distance_m: float, cls: str, track_id: int) -> Detection:
-    features = np.array([0.0, 0.0, 0.0, distance_m, 0.0, 0.0])
-    probabilities = np.array([1.0 - DRAWN_P_TARGET if c == "noise" else 0.0 for c in DETECTOR_CLASSES])
-    probabilities[DETECTOR_CLASSES.index(cls)] += DRAWN_P_TARGET if cls != "noise" else 0.0
-    return Detection(tuple(box_px), features, cls, probabilities, DRAWN_P_TARGET, track_id)
+        return drawn_detection((int(x), int(y), int(w), int(h)), distance_m, DETECTOR_CLASSES[int(cls)], self.fa_track)
 
 
 class _Areas:
