@@ -72,6 +72,7 @@ class SensedFrame:
             else:  # the camera's candidates and their forward distances, from the step's lists
                 inputs = s.draw_inputs()
                 first, end = inputs.pairs.bounds(i)
-                self._truth = tuple(SensedTruth(s, i, j, forward_m <= DETECTOR_RANGE_M) for j, forward_m
-                                    in zip(inputs.pairs.agent_list[first:end], inputs.forward_m[first:end]))  # fmt: skip
+                agents, forward_m = inputs.pairs.agent_list[first:end], inputs.forward_m[first:end]
+                self._truth = tuple(SensedTruth(s, i, j, f_m <= DETECTOR_RANGE_M)
+                                    for j, f_m in zip(agents, forward_m, strict=True))  # fmt: skip
         return self._truth

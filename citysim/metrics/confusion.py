@@ -84,6 +84,35 @@ def greedy_match(iou: np.ndarray, threshold: float) -> list[tuple[int, int]]:
     return pairs
 
 
+def match_boxes(boxes_a: Sequence, boxes_b: Sequence, threshold: float) -> list[tuple[int, int]]:
+    """``greedy_match(iou_matrix(boxes_a, boxes_b), threshold)`` on plain floats, for a frame's few
+    boxes (numpy's per-call cost was most of the scoring). The same IEEE operations in the same
+    order give the same IoUs; Python's sort is stable, as the matrix's argsort, so ties are taken
+    in the same (row-major) order and the pairs are the same."""
+    ious: list[float] = []
+    for ax, ay, aw, ah in boxes_a:
+        ax, ay, aw, ah = float(ax), float(ay), float(aw), float(ah)
+        for bx, by, bw, bh in boxes_b:
+            bx, by, bw, bh = float(bx), float(by), float(bw), float(bh)
+            iw = max(min(ax + aw, bx + bw) - max(ax, bx), 0.0)
+            ih = max(min(ay + ah, by + bh) - max(ay, by), 0.0)
+            inter = iw * ih
+            union = aw * ah + bw * bh - inter
+            ious.append(inter / union if union > 0 else 0.0)
+    n_b = len(boxes_b)
+    pairs: list[tuple[int, int]] = []
+    used_r, used_c = set(), set()
+    for flat in sorted(range(len(ious)), key=lambda k: -ious[k]):
+        if ious[flat] < threshold:
+            break
+        r, c = divmod(flat, n_b)
+        if r not in used_r and c not in used_c:
+            pairs.append((r, c))
+            used_r.add(r)
+            used_c.add(c)
+    return pairs
+
+
 @dataclass
 class _Pass:
     cls: str
@@ -148,8 +177,8 @@ class DetectionConfusion:
         det_target = [d.p_target >= self.target_threshold for d in detections]
         pairs: list[tuple[int, int]] = []
         if truth and detections:  # without both, nothing to match, no IoU to compute
-            iou = iou_matrix([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections])
-            pairs = greedy_match(iou, self.iou_threshold)
+            pairs = match_boxes([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections],
+                                self.iou_threshold)
         self.frames += 1
         self.regions += len(detections)
         matched_truth = dict(pairs)

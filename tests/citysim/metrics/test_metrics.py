@@ -362,3 +362,16 @@ def test_tracker_state_stays_bounded_as_objects_come_and_go():
     s = tracker.summary()["overall"]
     assert s["objects"] == 100 and s["visits"] == 100 * 3
     assert s["unlit_crossings"] == 100  # every pedestrian crosses the dim middle zone
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_matching_on_plain_floats_pairs_as_the_iou_matrix_does(seed):
+    # small integer boxes on a small grid: many equal IoUs (ties), empty overlaps and zero-area boxes
+    from citysim.metrics.confusion import greedy_match, iou_matrix, match_boxes
+
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        a = [tuple(int(v) for v in row) for row in rng.integers(0, 6, size=(int(rng.integers(1, 5)), 4))]
+        b = [tuple(int(v) for v in row) for row in rng.integers(0, 6, size=(int(rng.integers(1, 5)), 4))]
+        for threshold in (0.0, 0.3, 0.5):
+            assert match_boxes(a, b, threshold) == greedy_match(iou_matrix(a, b), threshold)
