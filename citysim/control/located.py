@@ -44,8 +44,8 @@ import numpy as np
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
+from citysim.control.camera_rays import CameraRays
 from citysim.control.detecting import DetectorPerFrame, detection_class
-from citysim.control.ground_memo import GroundMemo
 from citysim.control.track_windows import (
     PAPER_K,
     PAPER_N,
@@ -181,7 +181,7 @@ class DetectorLocated(DetectorPerFrame):
         full = windows_wait(ctx.sensors)
         self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full)
                         for _ in ctx.camera_lamps]  # fmt: skip
-        self.ground = [GroundMemo(det.camera) for det in self.detectors]
+        self.ground = [CameraRays(det.camera) for det in self.detectors]
         self.lanes = [(lane.y_center_m - lane.width_m / 2 - LANE_SLACK_M, lane.y_center_m + lane.width_m / 2
                        + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
         self.blind_end_lamps = blind_end_lamps(ctx.street) if ctx.spec.light_blind_ends in (None, True) else []
