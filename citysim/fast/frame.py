@@ -67,12 +67,12 @@ class SensedFrame:
     def truth(self) -> tuple:
         if self._truth is None:
             s, i = self.sensors, self.lamp_index
-            if not s.agents or not s.pairs("seen").count(i):
+            if not s.seen_by(i):
                 self._truth = ()
             else:  # the camera's candidates and their forward distances, from the step's lists
-                inputs = s.draw_inputs()
-                first, end = inputs.pairs.bounds(i)
-                agents, forward_m = inputs.pairs.agent_list[first:end], inputs.forward_m[first:end]
+                pairs = s.step_pairs()
+                first, end = pairs.bounds(i)
+                agents, forward_m = pairs.agents[first:end], pairs.forward_m[first:end]
                 self._truth = tuple(SensedTruth(s, i, j, f_m <= DETECTOR_RANGE_M)
                                     for j, f_m in zip(agents, forward_m, strict=True))  # fmt: skip
         return self._truth

@@ -34,14 +34,13 @@ from citysim.fast.model import (
     threshold_conditions,
     threshold_key,
 )
-from citysim.fast.pairs import CandidatePairs, PairDrawInputs
+from citysim.fast.pairs import CandidatePairs, StepPairs
 from citysim.fast.records import is_young
 from citysim.fast.steps import StepGeometries
 from detector.detector import Detection
 from detector.segment import SegmenterParams
 
 _NO_INDICES = np.zeros(0, np.int64)
-_NO_LIGHT = np.zeros(0, np.float64)
 #: A hit standing more than this ahead of its road user (m) is its light's patch, not its body.
 AHEAD_OF_BODY_M = 2.0
 
@@ -59,7 +58,9 @@ class FastSensors:
         self.rngs = rngs
         self.fps = fps
         self.p_hit = model.p_hit_array()
+        self.p_hit_flat: list[float] = self.p_hit.ravel().tolist()  # read per pair (``StepPairs.p_hit``)
         self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
+        self.persistence_list: list[float] = self.persistence.tolist()
         self.class_cdf = {k: np.cumsum(v).tolist() for k, v in model.class_given_hit.items()}
         self.area_samples = {k: np.sort(np.asarray(v, dtype=np.float64)) for k, v in model.area_fraction.items()}
         self._samples_by_key: dict[tuple, np.ndarray | None] = {}
@@ -70,18 +71,15 @@ class FastSensors:
         #: when the lamps' levels last changed: only the threshold baselines' segmenters read it, so
         #: it is kept (every observed frame) only once one of them is made
         self.changes: LevelChanges | None = None
-        self.steps = StepGeometries(self.geometry)
+        self.steps = StepGeometries(self.geometry, self.p_hit.shape)
         #: the agents' geometry this frame (``citysim.fast.steps``); ``cand`` its candidates
         self.step = self.steps.of([], None)
         self.cand = self.step.cand
-        self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
         #: per ``cand`` matrix ("seen", "beam_seen"), this step: the pairs it marks, camera by camera
         self._pairs: dict[str, CandidatePairs] = {}
-        self._draw_inputs: PairDrawInputs | None = None  # this step's, of the "seen" pairs
-        self._pair_p: list[list[float]] | None = None  # this frame's p_hit of the "seen" pairs
+        self._step_pairs: StepPairs | None = None  # this step's candidate pairs as lists
         self._awake: list[bool] | None = None
-        self._lit_cells: np.ndarray | None = None
         self._lamps_lit: list[int] | None = None  # ``lit`` of every lamp this frame, on first ask
 
     def detectors(self, ctx, threshold: float) -> list[SensedDetector]:
@@ -103,17 +101,11 @@ class FastSensors:
             self.agents = agents
             self._boxes = {}
             self._pairs = {}
-            self._draw_inputs = None
+            self._step_pairs = None
             self._awake = None
         self.levels = levels
         if self.changes is not None:
             self.changes.update(frame_k / self.fps, levels)
-        if agents:  # the level of the lamp nearest each agent
-            self.light = np.asarray(levels, dtype=np.float64)[self.step.nearest_lamp]
-        else:
-            self.light = _NO_LIGHT
-        self._lit_cells = None
-        self._pair_p = None
         self._lamps_lit = None
 
     def awake_cameras(self) -> list[bool]:
@@ -137,38 +129,29 @@ class FastSensors:
         return self.pairs(matrix).of(lamp_index)
 
     def pairs(self, matrix: str) -> CandidatePairs:
-        """The (agent, camera) pairs ``cand.<matrix>`` marks this step: every camera's found in one
-        pass once a step (the detector and the segmenter of each judged frame both ask)."""
+        """The (agent, camera) pairs ``cand.<matrix>`` marks this step, as index arrays: every
+        camera's found in one pass once a step."""
         pairs = self._pairs.get(matrix)
         if pairs is None:
             pairs = self._pairs[matrix] = CandidatePairs(getattr(self.cand, matrix), self.geometry.n)
         return pairs
 
-    def draw_inputs(self) -> PairDrawInputs:
-        """This step's ``PairDrawInputs`` of the candidates ("seen" pairs) of every camera."""
-        if self._draw_inputs is None:
-            self._draw_inputs = PairDrawInputs(self.pairs("seen"), self.cand.forward_m)
-        return self._draw_inputs
+    def step_pairs(self) -> StepPairs:
+        """This step's candidates ("seen" pairs) of every camera as lists (``citysim.fast.pairs``)."""
+        if self._step_pairs is None:
+            self._step_pairs = self.step.pairs(self.p_hit.shape)
+        return self._step_pairs
 
-    def candidate_draws(self) -> tuple[PairDrawInputs, list[list[float]]]:
-        """What the hit draws of this frame's candidates read, for every camera's at once: the
-        step's ``draw_inputs`` and, per pair, ``p_hit_of`` with an old and a young background."""
-        inputs = self.draw_inputs()
-        if self._pair_p is None:
-            if self._lit_cells is None:
-                self._lit_cells = (self.light >= LIT_LEVEL).astype(np.int64)
-            self._pair_p = inputs.p_of(self.p_hit, self.step.cells, self._lit_cells)
-        return inputs, self._pair_p
+    def seen_by(self, lamp_index: int) -> int:
+        """How many road-user candidates camera ``lamp_index`` has this frame."""
+        return self.step_pairs().count(lamp_index) if self.agents else 0
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
-        """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
-
-        The cells of every agent for every camera are binned once per step (``StepGeometry.cells``,
-        not one per camera); the light bin once per frame's levels."""
-        if self._lit_cells is None:
-            self._lit_cells = (self.light >= LIT_LEVEL).astype(np.int64)
+        """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell,
+        with numpy per camera: what ``StepPairs.p_hit`` reads from lists (the tests hold them equal)."""
+        lit_cells = (np.asarray(self.levels, dtype=np.float64)[self.step.nearest_lamp] >= LIT_LEVEL).astype(np.int64)
         kind, distance, bearing, speed = self.step.cells
-        return self.p_hit[kind[idx], distance[idx, lamp_index], bearing[idx, lamp_index], self._lit_cells[idx],
+        return self.p_hit[kind[idx], distance[idx, lamp_index], bearing[idx, lamp_index], lit_cells[idx],
                           int(young), speed[idx]]  # fmt: skip
 
     def box_px(self, lamp_index: int, agent_index: int) -> tuple[int, int, int, int]:
@@ -177,9 +160,9 @@ class FastSensors:
         the frame's truth is scored)."""
         key = (lamp_index, agent_index)
         if key not in self._boxes:
-            pairs = self.pairs("seen")
+            pairs = self.step_pairs()
             first, end = pairs.bounds(lamp_index)
-            idx = pairs.agent_list[first:end]
+            idx = pairs.agents[first:end]
             if agent_index not in idx:
                 idx = [agent_index]
             for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
@@ -197,9 +180,13 @@ class FastSensors:
 
     def lit(self, lamp_index: int) -> int:
         """1 when lamp ``lamp_index`` is lit this frame, else 0 (every lamp's read once per frame)."""
+        return self.lamps_lit()[lamp_index]
+
+    def lamps_lit(self) -> list[int]:
+        """``lit`` of every lamp this frame (its light bin: the level as float64 against ``LIT_LEVEL``)."""
         if self._lamps_lit is None:
-            self._lamps_lit = (self.levels >= LIT_LEVEL).astype(int).tolist()
-        return self._lamps_lit[lamp_index]
+            self._lamps_lit = (np.asarray(self.levels, dtype=np.float64) >= LIT_LEVEL).astype(int).tolist()
+        return self._lamps_lit
 
 
 class _LearningRate:
@@ -243,7 +230,7 @@ class SensedDetector:
 
     def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
-        seen = bool(s.agents) and s.pairs("seen").count(i) > 0
+        seen = s.seen_by(i) > 0
         detections = self._candidates(k, is_young(learning_rate)) if seen else []
         beams = s.beams_of(i)
         if len(beams):
@@ -257,14 +244,14 @@ class SensedDetector:
 
     def _candidates(self, k: int, young: bool) -> list[Detection]:
         """Frame ``k``'s draws for the camera's candidates (``young``: its background is young)."""
-        s = self.sensors
-        inputs, pair_p = s.candidate_draws()
-        first, end = inputs.pairs.bounds(self.lamp_index)
-        idx = inputs.pairs.agent_list[first:end]
+        s, i = self.sensors, self.lamp_index
+        pairs = s.step_pairs()
+        first, end = pairs.bounds(i)
+        idx = pairs.agents[first:end]
         agents = [s.agents[j] for j in idx]
-        fwd = inputs.forward_m[first:end]
-        p = [p_old_young[young] for p_old_young in pair_p[first:end]]
-        rho = inputs.persistence_of(s.step.cells[0], s.persistence)[first:end]
+        fwd = pairs.forward_m[first:end]
+        p = pairs.p_hit(i, s.p_hit_flat, s.lamps_lit(), young)
+        rho = [s.persistence_list[kind] for kind in pairs.kind[first:end]]
         hits = self._chain_draws([a.object_id for a in agents], p, rho, k)
         out = [self._hit_detection(a, idx[n], fwd[n], self._drawn_class(a.cls))
                for n, a in enumerate(agents) if hits[n]]  # fmt: skip

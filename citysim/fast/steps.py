@@ -20,6 +20,7 @@ import numpy as np
 
 from citysim.fast.geometry import CameraGeometry, Candidates
 from citysim.fast.model import KINDS, cell_of
+from citysim.fast.pairs import ChunkPairs, StepPairs
 from citysim.world.agents import AgentColumns, AgentState
 
 #: ``KINDS`` index of each kind's name
@@ -34,13 +35,17 @@ def p_hit_cells(kinds: np.ndarray, cand: Candidates, speed_mps: np.ndarray) -> t
 
 
 class StepGeometry:
-    """One step's agents seen from every camera: ``cand``, ``nearest_lamp`` (A,) and ``cells``."""
+    """One step's agents seen from every camera: ``cand``, ``nearest_lamp`` (A,), ``cells`` and
+    ``pairs``; ``pairs_of``: the step's ``StepPairs`` (made on first ask)."""
 
-    def __init__(self, cand: Candidates, nearest_lamp: np.ndarray, cells_of: Callable[[], tuple[np.ndarray, ...]]):
+    def __init__(self, cand: Candidates, nearest_lamp: np.ndarray, cells_of: Callable[[], tuple[np.ndarray, ...]],
+                 pairs_of: Callable[[], StepPairs] | None = None):  # fmt: skip
         self.cand = cand
         self.nearest_lamp = nearest_lamp
         self._cells_of = cells_of
         self._cells: tuple[np.ndarray, ...] | None = None
+        self._pairs_of = pairs_of
+        self._pairs: StepPairs | None = None
 
     @property
     def cells(self) -> tuple[np.ndarray, ...]:
@@ -48,6 +53,17 @@ class StepGeometry:
         if self._cells is None:
             self._cells = self._cells_of()
         return self._cells
+
+    def pairs(self, table_shape: tuple[int, ...]) -> StepPairs:
+        """The step's candidate pairs as lists (``citysim.fast.pairs``), made on first ask: cut from
+        its chunk's, or found from the step's own arrays (``table_shape``: the p_hit table's)."""
+        if self._pairs is None:
+            if self._pairs_of is not None:
+                self._pairs = self._pairs_of()
+            else:
+                chunk = ChunkPairs(self.cand.seen, self.cand.forward_m, self.cells, self.nearest_lamp, table_shape)
+                self._pairs = chunk.step(0, len(self.nearest_lamp), self.cand.seen.shape[1])
+        return self._pairs
 
 
 def step_of_agents(geometry: CameraGeometry, agents: Sequence[AgentState]) -> StepGeometry:
@@ -63,14 +79,17 @@ def step_of_agents(geometry: CameraGeometry, agents: Sequence[AgentState]) -> St
 
 
 class ChunkGeometry:
-    """``StepGeometry`` of every row of a chunk of replayed steps, computed for all rows at once."""
+    """``StepGeometry`` of every row of a chunk of replayed steps, computed for all rows at once
+    (``table_shape``: the p_hit table's, for the pairs' cells)."""
 
-    def __init__(self, geometry: CameraGeometry, columns: AgentColumns):
+    def __init__(self, geometry: CameraGeometry, columns: AgentColumns, table_shape: tuple[int, ...]):
         self.columns = columns
         xy = np.column_stack([columns.x_m, columns.y_m])
         self.cand = geometry.candidates_at(xy, columns.light_on, columns.heading_rad)
         self.nearest_lamp = geometry.nearest_lamp(columns.x_m)
+        self.table_shape = table_shape
         self._cells: tuple[np.ndarray, ...] | None = None
+        self._pairs: ChunkPairs | None = None
 
     def cells(self) -> tuple[np.ndarray, ...]:
         """``p_hit_cells`` of every row, made on first ask."""
@@ -79,18 +98,27 @@ class ChunkGeometry:
             self._cells = p_hit_cells(kinds, self.cand, self.columns.speed_mps)
         return self._cells
 
+    def pairs(self) -> ChunkPairs:
+        """The candidate pairs of every row, made on first ask."""
+        if self._pairs is None:
+            self._pairs = ChunkPairs(self.cand.seen, self.cand.forward_m, self.cells(), self.nearest_lamp,
+                                     self.table_shape)  # fmt: skip
+        return self._pairs
+
     def step(self, first: int, n: int) -> StepGeometry:
         """The step whose ``n`` agents are the rows from ``first``."""
         rows = slice(first, first + n)
         return StepGeometry(self.cand.rows(first, n), self.nearest_lamp[rows],
-                            lambda: tuple(cells[rows] for cells in self.cells()))  # fmt: skip
+                            lambda: tuple(cells[rows] for cells in self.cells()),
+                            lambda: self.pairs().step(first, n, self.cand.seen.shape[1]))  # fmt: skip
 
 
 class StepGeometries:
     """The ``StepGeometry`` of each step asked for, from its chunk's one pass when it is replayed."""
 
-    def __init__(self, geometry: CameraGeometry):
+    def __init__(self, geometry: CameraGeometry, table_shape: tuple[int, ...]):
         self.geometry = geometry
+        self.table_shape = table_shape
         self._chunk: ChunkGeometry | None = None
 
     def of(self, agents: Sequence[AgentState], rows: tuple[AgentColumns, int] | None) -> StepGeometry:
@@ -100,5 +128,5 @@ class StepGeometries:
             return step_of_agents(self.geometry, agents)
         columns, first = rows
         if self._chunk is None or self._chunk.columns is not columns:
-            self._chunk = ChunkGeometry(self.geometry, columns)
+            self._chunk = ChunkGeometry(self.geometry, columns, self.table_shape)
         return self._chunk.step(first, len(agents))

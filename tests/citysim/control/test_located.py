@@ -132,3 +132,13 @@ def test_the_first_lamp_whose_approach_no_camera_sees_is_kept_lit_and_only_it():
     off = build_controller(build_night(scenario), ControllerSpec(name="detector_located", light_blind_ends=False))
     off.on_physics_step(0.0, [])
     assert all(lamp.target_level < 1.0 for lamp in off.ctx.lamps)
+
+
+def test_the_line_slope_is_polyfits():
+    from citysim.control.located import line_slope
+
+    rng = np.random.default_rng(5)
+    for n in range(3, 40):
+        ts = np.cumsum(rng.uniform(0.05, 0.2, n))
+        xs = rng.uniform(-50, 400, 1) + rng.normal(0, 8, 1) * ts + rng.normal(0, 0.3, n)
+        assert line_slope(ts - ts[0], xs) == float(np.polyfit(ts - ts[0], xs, 1)[0])
