@@ -56,9 +56,10 @@ class SensedTruth:
 class SensedFrame:
     """What fast mode passes where a frame would be: the camera's shape and its candidates' truth."""
 
+    __slots__ = ("shape", "sensors", "lamp_index", "_truth")
+
     def __init__(self, sensors, lamp_index: int):
-        cam = sensors.geometry.cameras[lamp_index]
-        self.shape = (cam.height_px, cam.width_px)
+        self.shape = sensors.frame_shapes[lamp_index]  # (height, width) px
         self.sensors = sensors
         self.lamp_index = lamp_index
         self._truth: tuple | None = None

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from citysim.fast.geometry import Candidates
+
 
 class CandidatePairs:
     """The pairs ``matrix`` (A, C; bool) marks, grouped by camera: the agents' indices (``of``)."""
@@ -34,22 +36,25 @@ class CandidatePairs:
 
 
 class ChunkPairs:
-    """The candidate pairs of every row of a chunk of steps (``seen``: (R, C) bool), row by row.
+    """The candidate pairs of every row of a chunk of steps (``cand``'s, R rows), row by row, and
+    where its beam pairs are (only whether a step has any is read here).
 
     ``cells``: the rows' p_hit cells less light and age (kind (R,), distance (R, C), bearing (R, C),
     speed (R,)), indices into a table of ``table_shape``; ``nearest_lamp`` (R,): each row's lamp."""
 
-    def __init__(self, seen: np.ndarray, forward_m: np.ndarray, cells: tuple[np.ndarray, ...],
-                 nearest_lamp: np.ndarray, table_shape: tuple[int, ...]):  # fmt: skip
-        rows, cameras = np.nonzero(seen)  # row-major: each row's cameras ascending
+    def __init__(self, cand: Candidates, cells: tuple[np.ndarray, ...], nearest_lamp: np.ndarray,
+                 table_shape: tuple[int, ...]):  # fmt: skip
+        rows, cameras = np.nonzero(cand.seen)  # row-major: each row's cameras ascending
         kind, distance, bearing, speed = cells
         zeros = np.zeros(len(rows), np.int64)
         base = np.ravel_multi_index((kind[rows], distance[rows, cameras], bearing[rows, cameras], zeros, zeros,
                                      speed[rows]), table_shape)  # fmt: skip
-        self.row_starts: list[int] = np.searchsorted(rows, np.arange(len(seen) + 1)).tolist()
+        row_bounds = np.arange(len(cand.seen) + 1)
+        self.row_starts: list[int] = np.searchsorted(rows, row_bounds).tolist()
+        self.beam_row_starts: list[int] = np.searchsorted(np.nonzero(cand.beam_seen)[0], row_bounds).tolist()
         self.rows: list[int] = rows.tolist()
         self.cameras: list[int] = cameras.tolist()
-        self.forward_m: list[float] = forward_m[rows, cameras].tolist()
+        self.forward_m: list[float] = cand.forward_m[rows, cameras].tolist()
         self.kind: list[int] = kind[rows].tolist()
         self.lamp: list[int] = nearest_lamp[rows].tolist()
         self.cell: list[int] = base.tolist()
@@ -65,10 +70,12 @@ class ChunkPairs:
 class StepPairs:
     """One step's pairs, camera by camera: per pair its agent's index in the step (``agents``),
     forward distance (m), kind (``KINDS`` index), nearest lamp and p_hit cell (flat, light and age
-    0); ``bounds(camera)``: where the camera's pairs are in those lists; ``p_hit`` their P(hit)."""
+    0); ``bounds(camera)``: where the camera's pairs are in those lists; ``p_hit`` their P(hit);
+    ``beams``: how many beam pairs the step has (any camera's)."""
 
     def __init__(self, chunk: ChunkPairs, first: int, n: int, n_cameras: int):
         lo, hi = chunk.row_starts[first], chunk.row_starts[first + n]
+        self.beams = chunk.beam_row_starts[first + n] - chunk.beam_row_starts[first]
         cameras = chunk.cameras
         # stable: within a camera the rows (agents) stay ascending, as np.nonzero(seen.T) gave them
         order = sorted(range(lo, hi), key=cameras.__getitem__)

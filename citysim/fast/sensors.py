@@ -55,6 +55,7 @@ class FastSensors:
     def __init__(self, model: SensorModel, street, rngs: list[np.random.Generator], fps: float):
         self.model = model
         self.geometry = CameraGeometry(street)
+        self.frame_shapes = [(cam.height_px, cam.width_px) for cam in self.geometry.cameras]
         self.rngs = rngs
         self.fps = fps
         self.p_hit = model.p_hit_array()
@@ -120,6 +121,8 @@ class FastSensors:
 
     def beams_of(self, lamp_index: int) -> np.ndarray:
         """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
+        if not self.agents or not self.step_pairs().beams:  # most steps: no beam in any camera's view
+            return _NO_INDICES
         return self._indices_seen("beam_seen", lamp_index)
 
     def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
@@ -219,6 +222,7 @@ class SensedDetector:
         self.last_regions: tuple = ()
         self.previous: dict[int, tuple[int, bool]] = {}  # object id -> (frame, hit)
         self.fa_left = 0
+        self.fa_may_start = bool(sensors.model.fa_reports)  # else ``_false_alarm`` draws nothing, reports nothing
         self.fa_report: tuple | None = None
         self.fa_track = 0
 
@@ -235,7 +239,7 @@ class SensedDetector:
         beams = s.beams_of(i)
         if len(beams):
             detections += self._beams(beams, k, is_young(learning_rate))
-        fa = self._false_alarm(k)
+        fa = self._false_alarm(k) if self.fa_left or self.fa_may_start else None
         if fa is not None:
             detections.append(fa)
         busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]

@@ -61,7 +61,7 @@ class StepGeometry:
             if self._pairs_of is not None:
                 self._pairs = self._pairs_of()
             else:
-                chunk = ChunkPairs(self.cand.seen, self.cand.forward_m, self.cells, self.nearest_lamp, table_shape)
+                chunk = ChunkPairs(self.cand, self.cells, self.nearest_lamp, table_shape)
                 self._pairs = chunk.step(0, len(self.nearest_lamp), self.cand.seen.shape[1])
         return self._pairs
 
@@ -101,8 +101,7 @@ class ChunkGeometry:
     def pairs(self) -> ChunkPairs:
         """The candidate pairs of every row, made on first ask."""
         if self._pairs is None:
-            self._pairs = ChunkPairs(self.cand.seen, self.cand.forward_m, self.cells(), self.nearest_lamp,
-                                     self.table_shape)  # fmt: skip
+            self._pairs = ChunkPairs(self.cand, self.cells(), self.nearest_lamp, self.table_shape)
         return self._pairs
 
     def step(self, first: int, n: int) -> StepGeometry:

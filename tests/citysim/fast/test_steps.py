@@ -42,7 +42,8 @@ def test_chunk_geometry_is_each_steps_own_bit_for_bit(tmp_path, monkeypatch):
         assert all(same_bits(a, b) for a, b in zip(cut.cells, own.cells, strict=True))
         cut_pairs, own_pairs = cut.pairs(table_shape()), own.pairs(table_shape())
         assert all(getattr(cut_pairs, f) == getattr(own_pairs, f) for f in ("agents", "forward_m", "kind", "lamp",
-                                                                             "cell", "starts"))  # fmt: skip
+                                                                             "cell", "starts", "beams"))  # fmt: skip
+        assert own_pairs.beams == int(own.cand.beam_seen.sum())
         pairs_read_as_numpy_reads_them(own, rng)
         compared.append((len(agents), int(own.cand.seen.sum()), int(beams.sum())))
 
