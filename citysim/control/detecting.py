@@ -63,7 +63,7 @@ class DetectorPerFrame(Controller):
         self.clock = BackgroundClock(len(ctx.camera_lamps), 1.0 / ctx.frame_period_s)
 
     def motion_seen(self, camera_index):
-        return len(self.detectors[camera_index].last_regions) > 0
+        return bool(self.detectors[camera_index].last_regions)  # asked per camera per frame
 
     def detect(self, camera_index, t_s, image) -> list | None:
         """The detector's detections, or None while the light in view is changing (not judged)."""

@@ -17,6 +17,8 @@ per-camera numpy reads gave.
 
 from __future__ import annotations
 
+from itertools import accumulate
+
 import numpy as np
 
 from citysim.fast.geometry import Candidates
@@ -85,11 +87,10 @@ class StepPairs:
         self.lamp = [chunk.lamp[q] for q in order]
         self.cell = [chunk.cell[q] for q in order]
         self.lit_stride, self.young_stride = chunk.lit_stride, chunk.young_stride
-        self.starts = [0] * (n_cameras + 1)
+        self.counts = [0] * n_cameras  # pairs per camera
         for q in order:
-            self.starts[cameras[q] + 1] += 1
-        for c in range(n_cameras):
-            self.starts[c + 1] += self.starts[c]
+            self.counts[cameras[q]] += 1
+        self.starts = [0, *accumulate(self.counts)]
 
     def count(self, camera: int) -> int:
         return self.starts[camera + 1] - self.starts[camera]

@@ -25,6 +25,9 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
     lamp_states = controller.ctx.lamp_states
     n = len(lamps)
     watch = [list(range(max(0, i - 1), min(n, i + 2))) for i in range(n)]
+    # bound once: the loop below runs per camera per frame (~300k times an hour)
+    on_frame, motion_seen = controller.on_frame, controller.motion_seen
+    collect = [collector.on_frame for collector in collectors]
     k = 0
     while True:
         yield env.timeout(max(0.0, k / fps - env.now))
@@ -40,15 +43,14 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
         sensors.observe(k, agents, lamp_states.levels_at(t), rows)
         awake = sensors.awake_cameras()
         for i in range(n):
-            if not (every or awake[i] or controller.motion_seen(i)
-                    or (any_ramping and any(ramping[j] for j in watch[i]))):  # fmt: skip
+            if not (every or awake[i] or motion_seen(i) or (any_ramping and any(ramping[j] for j in watch[i]))):
                 continue
             frame = SensedFrame(sensors, i)
-            detections = controller.on_frame(i, t, frame)
-            if collectors:
+            detections = on_frame(i, t, frame)
+            if collect:
                 truth = frame.truth if detections is not None else ()
-                for collector in collectors:
-                    collector.on_frame(i, t, truth, detections)
+                for collector_on_frame in collect:
+                    collector_on_frame(i, t, truth, detections)
         k += 1
 
 

@@ -112,7 +112,7 @@ class FastSensors:
     def awake_cameras(self) -> list[bool]:
         """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
         if self._awake is None:
-            self._awake = self.cand.awake.tolist()
+            self._awake = self.cand.awake.tolist() if self.agents else [False] * self.geometry.n
         return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
@@ -147,7 +147,7 @@ class FastSensors:
 
     def seen_by(self, lamp_index: int) -> int:
         """How many road-user candidates camera ``lamp_index`` has this frame."""
-        return self.step_pairs().count(lamp_index) if self.agents else 0
+        return self.step_pairs().counts[lamp_index] if self.agents else 0
 
     def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
         """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell,
@@ -239,10 +239,11 @@ class SensedDetector:
         beams = s.beams_of(i)
         if len(beams):
             detections += self._beams(beams, k, is_young(learning_rate))
-        fa = self._false_alarm(k) if self.fa_left or self.fa_may_start else None
+        lit = s.lamps_lit()[i]
+        fa = self._false_alarm(k, lit) if self.fa_left or self.fa_may_start else None
         if fa is not None:
             detections.append(fa)
-        busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]
+        busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
         self.last_regions = (True,) if busy else ()
         return detections
 
@@ -311,10 +312,11 @@ class SensedDetector:
         return [drawn_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), self._drawn_class(BEAM), keys[n])
                 for n, a in enumerate(agents) if hits[n]]  # fmt: skip
 
-    def _false_alarm(self, k: int) -> Detection | None:
+    def _false_alarm(self, k: int, lit: int) -> Detection | None:
+        """Frame ``k``'s false alarm, if an episode runs (``lit``: the camera's lamp's ``lit``)."""
         model = self.sensors.model
         if self.fa_left == 0 and model.fa_reports:
-            if self.rng.random() < model.fa_start_p[self.sensors.lit(self.lamp_index)]:
+            if self.rng.random() < model.fa_start_p[lit]:
                 lengths = model.fa_length_frames
                 self.fa_left = int(lengths[int(self.rng.integers(len(lengths)))])
                 self.fa_report = tuple(model.fa_reports[int(self.rng.integers(len(model.fa_reports)))])

@@ -19,6 +19,7 @@ from citysim.metrics.collector import Collector
 
 #: Detector class order (detector.classes.CLASSES): rows/columns of ``confusion_5``.
 CONFUSION_CLASSES = DETECTOR_CLASSES
+_CLASS_INDEX = {cls: i for i, cls in enumerate(CONFUSION_CLASSES)}
 #: The detector's target classes: passes are counted per class it should call them.
 _TARGET_DETECTOR_CLASSES = DETECTOR_CLASSES[1:]
 
@@ -143,14 +144,18 @@ class DetectionConfusion:
         self.iou_threshold = iou_threshold
         self.target_threshold = target_threshold
         self.pass_gap_s = pass_gap_s
-        self.confusion_5 = np.zeros(
-            (len(CONFUSION_CLASSES), len(CONFUSION_CLASSES)), dtype=np.int64
-        )
+        # counted in plain ints (a numpy element's += cost ~10x): ``confusion_5`` is its array
+        self._confusion = [[0] * len(CONFUSION_CLASSES) for _ in CONFUSION_CLASSES]
         self.tp = self.fp = self.fn = self.tn = 0
         self.frames = self.regions = self.noise_regions = 0
         self._passes: dict[int, dict[int, _Pass]] = {}
         # detector class -> [eligible, missed]
         self._pass_counts = {c: [0, 0] for c in _TARGET_DETECTOR_CLASSES}
+
+    @property
+    def confusion_5(self) -> np.ndarray:
+        """Counts of (truth class, detected class), rows and columns ``CONFUSION_CLASSES``."""
+        return np.array(self._confusion, dtype=np.int64)
 
     @staticmethod
     def _index(cls: str, field_name: str) -> int:
@@ -171,6 +176,9 @@ class DetectionConfusion:
         if not truth and not detections:  # most judged frames: nothing to count but the frame
             self.frames += 1
             self._end_passes(lamp_index, t_s)
+            return
+        if not detections:  # a frame with road users in view and no detection: only misses to count
+            self._add_unseen(truth, lamp_index, t_s)
             return
         truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [self._index(d.cls, "detections.cls") for d in detections]
@@ -206,6 +214,26 @@ class DetectionConfusion:
             p.detected |= c is not None and det_target[c]
         self._end_passes(lamp_index, t_s)
 
+    def _add_unseen(self, truth: Sequence[TruthLike], lamp_index: int, t_s: float) -> None:
+        """``add`` of a frame without detections: each fully visible road user a miss, passes kept."""
+        self.frames += 1
+        passes = self._passes.setdefault(lamp_index, {})
+        for t in truth:
+            truth_cls = scored_as(t.cls)
+            if truth_cls == "noise":
+                continue
+            if t.fully_visible:
+                self._count(truth_cls, 0, False)
+            p = passes.get(t.object_id)
+            if p is not None and t_s - p.last_seen_s > self.pass_gap_s:
+                self._end_pass(p)  # back in view after a gap: that was one pass, this is another
+                p = None
+            if p is None:
+                p = passes[t.object_id] = _Pass(truth_cls, t_s)
+            p.last_seen_s = t_s
+            p.fully_seen |= bool(t.fully_visible)
+        self._end_passes(lamp_index, t_s)
+
     def _end_passes(self, lamp_index: int, t_s: float) -> None:
         """End lamp ``lamp_index``'s passes unseen for more than ``pass_gap_s`` at ``t_s``."""
         passes = self._passes.get(lamp_index)
@@ -215,7 +243,7 @@ class DetectionConfusion:
             self._end_pass(passes.pop(object_id))
 
     def _count(self, truth_cls: str, pred_index: int, pred_target: bool) -> None:
-        self.confusion_5[CONFUSION_CLASSES.index(truth_cls), pred_index] += 1
+        self._confusion[_CLASS_INDEX[truth_cls]][pred_index] += 1
         if truth_cls == "noise":
             self.noise_regions += 1
             self.fp += int(pred_target)
