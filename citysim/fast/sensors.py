@@ -22,7 +22,7 @@ import numpy as np
 from citysim.config.kinds import DETECTOR_CLASSES
 from citysim.fast.drawn import SensedTracker, drawn_detection
 from citysim.fast.frame import SensedFrame
-from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
+from citysim.fast.geometry import CameraGeometry, Candidates, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
     BEAM,
     KINDS,
@@ -75,7 +75,6 @@ class FastSensors:
         self.steps = StepGeometries(self.geometry, self.p_hit.shape)
         #: the agents' geometry this frame (``citysim.fast.steps``); ``cand`` its candidates
         self.step = self.steps.of([], None)
-        self.cand = self.step.cand
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
         #: per ``cand`` matrix ("seen", "beam_seen"), this step: the pairs it marks, camera by camera
         self._pairs: dict[str, CandidatePairs] = {}
@@ -98,7 +97,6 @@ class FastSensors:
             # an empty street has no candidates, whichever empty list the step gave
             if agents or self.agents:
                 self.step = self.steps.of(agents, rows)
-                self.cand = self.step.cand
             self.agents = agents
             self._boxes = {}
             self._pairs = {}
@@ -109,10 +107,15 @@ class FastSensors:
             self.changes.update(frame_k / self.fps, levels)
         self._lamps_lit = None
 
+    @property
+    def cand(self) -> Candidates:
+        """This step's candidates (``citysim.fast.geometry``)."""
+        return self.step.cand
+
     def awake_cameras(self) -> list[bool]:
         """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
         if self._awake is None:
-            self._awake = self.cand.awake.tolist() if self.agents else [False] * self.geometry.n
+            self._awake = self.step.awake() if self.agents else [False] * self.geometry.n
         return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:

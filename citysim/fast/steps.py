@@ -35,17 +35,31 @@ def p_hit_cells(kinds: np.ndarray, cand: Candidates, speed_mps: np.ndarray) -> t
 
 
 class StepGeometry:
-    """One step's agents seen from every camera: ``cand``, ``nearest_lamp`` (A,), ``cells`` and
-    ``pairs``; ``pairs_of``: the step's ``StepPairs`` (made on first ask)."""
+    """One step's agents seen from every camera: ``cand``, ``awake``, ``nearest_lamp`` (A,), ``cells``
+    and ``pairs``, each made on first ask (``*_of``; a replayed step's ``cand`` is cut from its
+    chunk's only when read: most frames read only ``awake`` and ``pairs``)."""
 
-    def __init__(self, cand: Candidates, nearest_lamp: np.ndarray, cells_of: Callable[[], tuple[np.ndarray, ...]],
-                 pairs_of: Callable[[], StepPairs] | None = None):  # fmt: skip
-        self.cand = cand
+    def __init__(self, cand_of: Callable[[], Candidates], nearest_lamp: np.ndarray,
+                 cells_of: Callable[[], tuple[np.ndarray, ...]], pairs_of: Callable[[], StepPairs] | None = None,
+                 awake_of: Callable[[], list[bool]] | None = None):  # fmt: skip
+        self._cand_of = cand_of
+        self._cand: Candidates | None = None
+        self._awake_of = awake_of
         self.nearest_lamp = nearest_lamp
         self._cells_of = cells_of
         self._cells: tuple[np.ndarray, ...] | None = None
         self._pairs_of = pairs_of
         self._pairs: StepPairs | None = None
+
+    @property
+    def cand(self) -> Candidates:
+        if self._cand is None:
+            self._cand = self._cand_of()
+        return self._cand
+
+    def awake(self) -> list[bool]:
+        """``cand.awake`` as a list."""
+        return self._awake_of() if self._awake_of is not None else self.cand.awake.tolist()
 
     @property
     def cells(self) -> tuple[np.ndarray, ...]:
@@ -75,7 +89,7 @@ def step_of_agents(geometry: CameraGeometry, agents: Sequence[AgentState]) -> St
 
     cand = geometry.candidates(agents)
     x_m = np.fromiter((a.x_m for a in agents), np.float64, len(agents))
-    return StepGeometry(cand, geometry.nearest_lamp(x_m), cells)
+    return StepGeometry(lambda: cand, geometry.nearest_lamp(x_m), cells)
 
 
 class ChunkGeometry:
@@ -107,9 +121,10 @@ class ChunkGeometry:
     def step(self, first: int, n: int) -> StepGeometry:
         """The step whose ``n`` agents are the rows from ``first``."""
         rows = slice(first, first + n)
-        return StepGeometry(self.cand.rows(first, n), self.nearest_lamp[rows],
+        return StepGeometry(lambda: self.cand.rows(first, n), self.nearest_lamp[rows],
                             lambda: tuple(cells[rows] for cells in self.cells()),
-                            lambda: self.pairs().step(first, n, self.cand.seen.shape[1]))  # fmt: skip
+                            lambda: self.pairs().step(first, n, self.cand.seen.shape[1]),
+                            lambda: self.cand.wake[rows].any(axis=0).tolist())  # fmt: skip
 
 
 class StepGeometries:

@@ -36,6 +36,7 @@ def test_chunk_geometry_is_each_steps_own_bit_for_bit(tmp_path, monkeypatch):
         matrices = ("forward_m", "bearing_rad", "seen", "wake", "beam_seen")
         assert all(same_bits(getattr(cut.cand, m), getattr(own.cand, m)) for m in matrices)
         assert same_bits(cut.cand.awake, own.cand.awake) and same_bits(cut.nearest_lamp, own.nearest_lamp)
+        assert cut.awake() == own.awake() == own.cand.awake.tolist()
         beams = own.cand.beam_seen  # a beam's geometry means something only where it is seen
         for m in ("beam_forward_m", "beam_bearing_rad"):
             assert same_bits(getattr(cut.cand, m)[beams], getattr(own.cand, m)[beams])
