@@ -149,6 +149,9 @@ class DetectionConfusion:
         self.tp = self.fp = self.fn = self.tn = 0
         self.frames = self.regions = self.noise_regions = 0
         self._passes: dict[int, dict[int, _Pass]] = {}
+        #: per lamp, at most the earliest last sighting of its passes (a sighting only moves it later):
+        #: the frames before any pass can end skip the scan of them (``_end_passes``)
+        self._earliest_seen_s: dict[int, float] = {}
         # detector class -> [eligible, missed]
         self._pass_counts = {c: [0, 0] for c in _TARGET_DETECTOR_CLASSES}
 
@@ -180,6 +183,11 @@ class DetectionConfusion:
         if not detections:  # a frame with road users in view and no detection: only misses to count
             self._add_unseen(truth, lamp_index, t_s)
             return
+        self._add_matched(truth, detections, lamp_index, t_s)
+
+    def _add_matched(self, truth: Sequence[TruthLike], detections: Sequence[DetectionLike], lamp_index: int,
+                     t_s: float) -> None:  # fmt: skip
+        """``add`` of a frame with detections: matched to the truth boxes, each counted."""
         truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [self._index(d.cls, "detections.cls") for d in detections]
         det_target = [d.p_target >= self.target_threshold for d in detections]
@@ -209,6 +217,7 @@ class DetectionConfusion:
                 p = None
             if p is None:
                 p = passes[t.object_id] = _Pass(truth_cls[r], t_s)
+                self._seen_since(lamp_index, t_s)
             p.last_seen_s = t_s
             p.fully_seen |= bool(t.fully_visible)
             p.detected |= c is not None and det_target[c]
@@ -230,6 +239,7 @@ class DetectionConfusion:
                 p = None
             if p is None:
                 p = passes[t.object_id] = _Pass(truth_cls, t_s)
+                self._seen_since(lamp_index, t_s)
             p.last_seen_s = t_s
             p.fully_seen |= bool(t.fully_visible)
         self._end_passes(lamp_index, t_s)
@@ -237,10 +247,18 @@ class DetectionConfusion:
     def _end_passes(self, lamp_index: int, t_s: float) -> None:
         """End lamp ``lamp_index``'s passes unseen for more than ``pass_gap_s`` at ``t_s``."""
         passes = self._passes.get(lamp_index)
-        if not passes:
-            return
+        if not passes or t_s - self._earliest_seen_s[lamp_index] <= self.pass_gap_s:
+            return  # none unseen long enough: t_s - last_seen_s is at most t_s - the earliest (IEEE)
         for object_id in [i for i, p in passes.items() if t_s - p.last_seen_s > self.pass_gap_s]:
             self._end_pass(passes.pop(object_id))
+        if passes:
+            self._earliest_seen_s[lamp_index] = min(p.last_seen_s for p in passes.values())
+        else:
+            del self._earliest_seen_s[lamp_index]
+
+    def _seen_since(self, lamp_index: int, t_s: float) -> None:
+        """A pass of lamp ``lamp_index`` began at ``t_s``: keep the earliest last sighting a lower bound."""
+        self._earliest_seen_s[lamp_index] = min(self._earliest_seen_s.get(lamp_index, t_s), t_s)
 
     def _count(self, truth_cls: str, pred_index: int, pred_target: bool) -> None:
         self._confusion[_CLASS_INDEX[truth_cls]][pred_index] += 1
