@@ -78,6 +78,11 @@ class StepPairs:
     def __init__(self, chunk: ChunkPairs, first: int, n: int, n_cameras: int):
         lo, hi = chunk.row_starts[first], chunk.row_starts[first + n]
         self.beams = chunk.beam_row_starts[first + n] - chunk.beam_row_starts[first]
+        self.lit_stride, self.young_stride = chunk.lit_stride, chunk.young_stride
+        if lo == hi:  # road users about, none a candidate
+            self.agents, self.forward_m, self.kind, self.lamp, self.cell = [], [], [], [], []
+            self.counts, self.starts = [0] * n_cameras, [0] * (n_cameras + 1)
+            return
         cameras = chunk.cameras
         # stable: within a camera the rows (agents) stay ascending, as np.nonzero(seen.T) gave them
         order = sorted(range(lo, hi), key=cameras.__getitem__)
@@ -86,7 +91,6 @@ class StepPairs:
         self.kind = [chunk.kind[q] for q in order]
         self.lamp = [chunk.lamp[q] for q in order]
         self.cell = [chunk.cell[q] for q in order]
-        self.lit_stride, self.young_stride = chunk.lit_stride, chunk.young_stride
         self.counts = [0] * n_cameras  # pairs per camera
         for q in order:
             self.counts[cameras[q]] += 1

@@ -104,6 +104,7 @@ class ChunkGeometry:
         self.table_shape = table_shape
         self._cells: tuple[np.ndarray, ...] | None = None
         self._pairs: ChunkPairs | None = None
+        self._wake: tuple[list[int], list[int]] | None = None
 
     def cells(self) -> tuple[np.ndarray, ...]:
         """``p_hit_cells`` of every row, made on first ask."""
@@ -118,13 +119,25 @@ class ChunkGeometry:
             self._pairs = ChunkPairs(self.cand, self.cells(), self.nearest_lamp, self.table_shape)
         return self._pairs
 
+    def awake(self, first: int, n: int) -> list[bool]:
+        """``cand.awake`` of the step of rows ``first`` to ``first + n``: whether any of them is in
+        each camera's wake view, from the chunk's wake pairs (found once, as lists)."""
+        if self._wake is None:
+            rows, cameras = np.nonzero(self.cand.wake)
+            self._wake = np.searchsorted(rows, np.arange(len(self.cand.wake) + 1)).tolist(), cameras.tolist()
+        row_starts, cameras = self._wake
+        awake = [False] * self.cand.wake.shape[1]
+        for camera in cameras[row_starts[first] : row_starts[first + n]]:
+            awake[camera] = True
+        return awake
+
     def step(self, first: int, n: int) -> StepGeometry:
         """The step whose ``n`` agents are the rows from ``first``."""
         rows = slice(first, first + n)
         return StepGeometry(lambda: self.cand.rows(first, n), self.nearest_lamp[rows],
                             lambda: tuple(cells[rows] for cells in self.cells()),
                             lambda: self.pairs().step(first, n, self.cand.seen.shape[1]),
-                            lambda: self.cand.wake[rows].any(axis=0).tolist())  # fmt: skip
+                            lambda: self.awake(first, n))  # fmt: skip
 
 
 class StepGeometries:
