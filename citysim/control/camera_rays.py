@@ -71,6 +71,9 @@ class CameraRays:
         """``project`` (distorted) of (N, 3) world points, as lists [u, v] (NaN: behind the camera)."""
         cam = (points_m - self.position_m) @ self.rotation.T  # world_to_cam's product, the same shapes
         front = cam[:, 2] > 0.01
+        if self.has_distortion and front.all():  # all in front (most boxes): every point, as they are
+            px, _ = cv2.projectPoints(cam, _NO_ROTATION, _NO_ROTATION, self.intrinsic, self.distortion)
+            return px.reshape(-1, 2).tolist()
         out = np.full((len(cam), 2), np.nan)
         if not front.any():
             return out.tolist()

@@ -237,12 +237,13 @@ class SensedDetector:
 
     def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
+        lamps_lit = s.lamps_lit()
         seen = s.seen_by(i) > 0
-        detections = self._candidates(k, is_young(learning_rate)) if seen else []
+        detections = self._candidates(k, is_young(learning_rate), lamps_lit) if seen else []
         beams = s.beams_of(i)
         if len(beams):
             detections += self._beams(beams, k, is_young(learning_rate))
-        lit = s.lamps_lit()[i]
+        lit = lamps_lit[i]
         fa = self._false_alarm(k, lit) if self.fa_left or self.fa_may_start else None
         if fa is not None:
             detections.append(fa)
@@ -250,15 +251,16 @@ class SensedDetector:
         self.last_regions = (True,) if busy else ()
         return detections
 
-    def _candidates(self, k: int, young: bool) -> list[Detection]:
-        """Frame ``k``'s draws for the camera's candidates (``young``: its background is young)."""
+    def _candidates(self, k: int, young: bool, lamps_lit: list[int]) -> list[Detection]:
+        """Frame ``k``'s draws for the camera's candidates (``young``: its background is young;
+        ``lamps_lit``: ``FastSensors.lamps_lit``)."""
         s, i = self.sensors, self.lamp_index
         pairs = s.step_pairs()
         first, end = pairs.bounds(i)
         idx = pairs.agents[first:end]
         agents = [s.agents[j] for j in idx]
         fwd = pairs.forward_m[first:end]
-        p = pairs.p_hit(i, s.p_hit_flat, s.lamps_lit(), young)
+        p = pairs.p_hit(i, s.p_hit_flat, lamps_lit, young)
         rho = [s.persistence_list[kind] for kind in pairs.kind[first:end]]
         hits = self._chain_draws([a.object_id for a in agents], p, rho, k)
         out = [self._hit_detection(a, idx[n], fwd[n], self._drawn_class(a.cls))
