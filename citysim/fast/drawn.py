@@ -7,7 +7,6 @@ keeps the k-of-n state the real detector's light box tracker would.
 from __future__ import annotations
 
 import dataclasses
-from collections import deque
 
 import numpy as np
 
@@ -20,24 +19,26 @@ DRAWN_P_TARGET = 0.9
 
 class SensedTracker:
     """Per track, the last n frames' hits; confirmed at k of them (``detector.confirm.Tracker``'s
-    defaults: 2 of 6). A track unseen for more than 3 frames starts over, as a dropped one would."""
+    defaults: 2 of 6). A track unseen for more than 3 frames starts over, as a dropped one would.
+    The hits are kept as the low n bits of an int (the latest the lowest): told every drawn
+    candidate's every frame, a deque per track cost more than the draw."""
 
     def __init__(self, k: int = 2, n: int = 6, max_missed_frames: int = 3):
         self.k, self.n, self.max_missed = k, n, max_missed_frames
-        self.history: dict[int, tuple[int, deque]] = {}
+        self.mask = (1 << n) - 1
+        self.history: dict[int, tuple[int, int]] = {}  # track -> (last frame, hit bits)
 
     def update(self, frame_k: int, track_id: int, hit: bool) -> None:
-        last_k, hist = self.history.get(track_id, (None, None))
-        if hist is None or frame_k - last_k > self.max_missed + 1:
-            hist = deque(maxlen=self.n)
-        hist.append(hit)
-        self.history[track_id] = (frame_k, hist)
+        last_k, bits = self.history.get(track_id, (None, 0))
+        if last_k is None or frame_k - last_k > self.max_missed + 1:
+            bits = 0
+        self.history[track_id] = (frame_k, ((bits << 1) | bool(hit)) & self.mask)
         if len(self.history) > 256:  # forget tracks long gone
             self.history = {t: v for t, v in self.history.items() if frame_k - v[0] <= self.max_missed + 1}
 
     def is_confirmed(self, track_id: int) -> bool:
         entry = self.history.get(track_id)
-        return entry is not None and sum(entry[1]) >= self.k
+        return entry is not None and entry[1].bit_count() >= self.k
 
 
 def drawn_detection(box_px, distance_m: float, cls: str, track_id: int) -> Detection:
