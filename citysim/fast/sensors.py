@@ -238,13 +238,16 @@ class SensedDetector:
     def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
         lamps_lit = s.lamps_lit()
-        seen = s.seen_by(i) > 0
+        pairs = s.step_pairs() if s.agents else None  # None: an empty street
+        seen = pairs is not None and pairs.counts[i] > 0
         detections = self._candidates(k, is_young(learning_rate), lamps_lit) if seen else []
-        beams = s.beams_of(i)
+        beams = s.beams_of(i) if pairs is not None and pairs.beams else _NO_INDICES
         if len(beams):
             detections += self._beams(beams, k, is_young(learning_rate))
         lit = lamps_lit[i]
-        fa = self._false_alarm(k, lit) if self.fa_left or self.fa_may_start else None
+        if self.fa_left == 0 and self.fa_may_start and self.rng.random() < s.model.fa_start_p[lit]:
+            self._start_false_alarm()
+        fa = self._false_alarm(k) if self.fa_left else None
         if fa is not None:
             detections.append(fa)
         busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
@@ -317,15 +320,16 @@ class SensedDetector:
         return [drawn_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), self._drawn_class(BEAM), keys[n])
                 for n, a in enumerate(agents) if hits[n]]  # fmt: skip
 
-    def _false_alarm(self, k: int, lit: int) -> Detection | None:
-        """Frame ``k``'s false alarm, if an episode runs (``lit``: the camera's lamp's ``lit``)."""
+    def _start_false_alarm(self) -> None:
+        """A false-alarm episode starts: its length (frames) and report drawn from calibration's."""
         model = self.sensors.model
-        if self.fa_left == 0 and model.fa_reports:
-            if self.rng.random() < model.fa_start_p[lit]:
-                lengths = model.fa_length_frames
-                self.fa_left = int(lengths[int(self.rng.integers(len(lengths)))])
-                self.fa_report = tuple(model.fa_reports[int(self.rng.integers(len(model.fa_reports)))])
-                self.fa_track -= 1  # negative ids: never an agent's
+        lengths = model.fa_length_frames
+        self.fa_left = int(lengths[int(self.rng.integers(len(lengths)))])
+        self.fa_report = tuple(model.fa_reports[int(self.rng.integers(len(model.fa_reports)))])
+        self.fa_track -= 1  # negative ids: never an agent's
+
+    def _false_alarm(self, k: int) -> Detection | None:
+        """Frame ``k``'s report of the running false-alarm episode (None once it has ended)."""
         if self.fa_left == 0:
             return None
         self.fa_left -= 1
