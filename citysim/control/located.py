@@ -122,13 +122,13 @@ class LocatedTrack:
     def recent(self, since_s: float) -> list[tuple[float, float]]:
         """The positions seen at ``since_s`` or later, oldest first: a tail of ``seen``, whose times
         never decrease (frames come in time order), found from its end."""
-        seen = self.seen
-        n = 0
-        for t, _ in reversed(seen):
-            if t < since_s:
+        recent = []
+        for seen in reversed(self.seen):
+            if seen[0] < since_s:
                 break
-            n += 1
-        return list(seen)[len(seen) - n :] if n else []
+            recent.append(seen)
+        recent.reverse()
+        return recent
 
     def predicted_x_m(self, t_s: float) -> float:
         t_last, x_last = self.last

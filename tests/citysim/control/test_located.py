@@ -143,3 +143,14 @@ def test_the_line_slope_is_polyfits():
         ts = np.cumsum(rng.uniform(0.05, 0.2, n))
         xs = rng.uniform(-50, 400, 1) + rng.normal(0, 8, 1) * ts + rng.normal(0, 0.3, n)
         assert located.line_slope(ts - ts[0], xs) == float(np.polyfit(ts - ts[0], xs, 1)[0])
+
+
+def test_the_recent_positions_are_those_at_or_after_the_time():
+    from citysim.control.located import LocatedTrack
+
+    track = LocatedTrack("pedestrian")
+    for k in range(100):  # more than the 64 kept; two sightings in some frames
+        for _ in range(1 + (k % 7 == 0)):
+            track.observe(k / 15, 0.1 * k)
+    for since_s in (-1.0, 3.0, 5.8, 6.0, 6.6, 7.0):
+        assert track.recent(since_s) == [(t, x) for t, x in track.seen if t >= since_s]
