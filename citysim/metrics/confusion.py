@@ -178,7 +178,8 @@ class DetectionConfusion:
         """Count one frame of lamp ``lamp_index``'s camera at ``t_s`` (s)."""
         if not truth and not detections:  # most judged frames: nothing to count but the frame
             self.frames += 1
-            self._end_passes(lamp_index, t_s)
+            if self._passes.get(lamp_index):
+                self._end_passes(lamp_index, t_s)
             return
         if not detections:  # a frame with road users in view and no detection: only misses to count
             self._add_unseen(truth, lamp_index, t_s)
