@@ -44,9 +44,14 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
         rows = night.replay.rows_of(agents) if night.replay is not None else None
         sensors.observe(k, agents, lamp_states.levels_at(t), rows)
         awake = sensors.awake_cameras()
-        for i in range(n):
-            if not (every or awake[i] or moving[i] or (any_ramping and any(ramping[j] for j in watch[i]))):
-                continue
+        # what decides whether a camera is judged was read above, before any camera is judged
+        if every:
+            judged = range(n)
+        elif any_ramping:
+            judged = [i for i in range(n) if awake[i] or moving[i] or any(ramping[j] for j in watch[i])]
+        else:
+            judged = [i for i, (woken, seen) in enumerate(zip(awake, moving, strict=True)) if woken or seen]
+        for i in judged:
             frame = SensedFrame(sensors, i)
             detections = on_frame(i, t, frame)
             if collect:
