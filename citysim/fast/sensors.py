@@ -81,6 +81,7 @@ class FastSensors:
         self._step_pairs: StepPairs | None = None  # this step's candidate pairs as lists
         self._awake: list[bool] | None = None
         self._lamps_lit: list[int] | None = None  # ``lit`` of every lamp this frame, on first ask
+        self._lit_levels: np.ndarray | None = None  # the levels it was read from
 
     def detectors(self, ctx, threshold: float) -> list[SensedDetector]:
         return [SensedDetector(self, i, threshold) for i in range(self.geometry.n)]
@@ -105,7 +106,8 @@ class FastSensors:
         self.levels = levels
         if self.changes is not None:
             self.changes.update(frame_k / self.fps, levels)
-        self._lamps_lit = None
+        if levels is not self._lit_levels or levels.flags.writeable:
+            self._lamps_lit = None  # a read-only array seen before (``LampStates``'): no level changed
 
     @property
     def cand(self) -> Candidates:
@@ -192,6 +194,7 @@ class FastSensors:
         """``lit`` of every lamp this frame (its light bin: the level as float64 against ``LIT_LEVEL``)."""
         if self._lamps_lit is None:
             self._lamps_lit = (np.asarray(self.levels, dtype=np.float64) >= LIT_LEVEL).astype(int).tolist()
+            self._lit_levels = self.levels
         return self._lamps_lit
 
 
