@@ -150,18 +150,6 @@ class FastSensors:
             self._step_pairs = self.step.pairs(self.p_hit.shape)
         return self._step_pairs
 
-    def seen_by(self, lamp_index: int) -> int:
-        """How many road-user candidates camera ``lamp_index`` has this frame."""
-        return self.step_pairs().counts[lamp_index] if self.agents else 0
-
-    def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
-        """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell,
-        with numpy per camera: what ``StepPairs.p_hit`` reads from lists (the tests hold them equal)."""
-        lit_cells = (np.asarray(self.levels, dtype=np.float64)[self.step.nearest_lamp] >= LIT_LEVEL).astype(np.int64)
-        kind, distance, bearing, speed = self.step.cells
-        return self.p_hit[kind[idx], distance[idx, lamp_index], bearing[idx, lamp_index], lit_cells[idx],
-                          int(young), speed[idx]]  # fmt: skip
-
     def box_px(self, lamp_index: int, agent_index: int) -> tuple[int, int, int, int]:
         """Agent ``agent_index``'s box in camera ``lamp_index`` this frame; the first ask projects
         all the camera's candidates at once (a box is asked for a hit, and for every candidate when
