@@ -44,6 +44,7 @@ import numpy as np
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
+from citysim.control.camera_rays import CameraRays
 from citysim.control.detecting import DetectorPerFrame, detection_class
 from citysim.control.track_windows import (
     PAPER_K,
@@ -113,14 +114,54 @@ class LocatedTrack:
             self.velocities.append(vx_mps)
             self.vx_mps = float(np.median(self.velocities))
             return
-        recent = [(t, x) for t, x in self.seen if t >= t_s - VELOCITY_WINDOW_S]
+        recent = self.recent(t_s - VELOCITY_WINDOW_S)
         if len(recent) >= 3 and recent[-1][0] - recent[0][0] >= 0.3:
             ts, xs = np.array(recent).T
-            self.vx_mps = float(np.polyfit(ts - ts[0], xs, 1)[0])
+            self.vx_mps = line_slope(ts - ts[0], xs)
+
+    def recent(self, since_s: float) -> list[tuple[float, float]]:
+        """The positions seen at ``since_s`` or later, oldest first: a tail of ``seen``, whose times
+        never decrease (frames come in time order), found from its end."""
+        recent = []
+        for seen in reversed(self.seen):
+            if seen[0] < since_s:
+                break
+            recent.append(seen)
+        recent.reverse()
+        return recent
 
     def predicted_x_m(self, t_s: float) -> float:
         t_last, x_last = self.last
         return x_last + (self.heading_vx_mps or 0.0) * (t_s - t_last)
+
+
+def line_slope(x: np.ndarray, y: np.ndarray) -> float:
+    """The slope of ``np.polyfit(x, y, 1)`` (x, y: 1-d float64), by its steps for a line without
+    the wrappers' checks (~20k fits an hour at 22:00; they were two thirds of the cost): the same
+    arrays through the same numpy operations (the Vandermonde matrix [x, 1], scaled by its
+    columns' norms; LAPACK's least squares as ``np.linalg.lstsq`` calls it, with polyfit's rcond,
+    under lstsq's error state), so the slope is polyfit's bit for bit (the tests compare them).
+    Polyfit's warning for a rank-deficient fit is left out: the times here span 0.3 s or more."""
+    x, y = x + 0.0, y + 0.0
+    lhs = np.empty((len(x), 2))  # np.vander(x, 2): x, then ones
+    lhs[:, 0] = x
+    lhs[:, 1] = 1.0
+    scale = np.sqrt((lhs * lhs).sum(axis=0))
+    lhs /= scale
+    if _lstsq is None:
+        c = np.linalg.lstsq(lhs, y, len(x) * _EPS)[0]
+    else:
+        with np.errstate(call=_lstsq_error, invalid="call", over="ignore", divide="ignore", under="ignore"):
+            c = _lstsq(lhs, y[:, None], len(x) * _EPS, signature="ddd->ddid")[0][:, 0]
+    return float(c[0] / scale[0])
+
+
+_EPS = float(np.finfo(np.float64).eps)
+# what np.linalg.lstsq calls, and raises from (None: not found in this numpy, lstsq itself is used)
+_lstsq = getattr(getattr(np.linalg, "_umath_linalg", None), "lstsq", None)
+_lstsq_error = getattr(getattr(np.linalg, "_linalg", None), "_raise_linalgerror_lstsq", None)
+if _lstsq_error is None:
+    _lstsq = None
 
 
 def blind_end_lamps(street: Street) -> list[int]:
@@ -153,6 +194,7 @@ class DetectorLocated(DetectorPerFrame):
         super().__init__(ctx)
         self.zone_start_m = np.array([s.zone_start_m for s in ctx.street.lamps])
         self.zone_end_m = np.array([s.zone_end_m for s in ctx.street.lamps])
+        self.zone_bounds_m = list(zip(self.zone_start_m.tolist(), self.zone_end_m.tolist(), strict=True))
         net, lum = ctx.network.spec, ctx.luminaire
         # dim -> full, the radio's worst usual delay, one frame: the lead every class needs
         self.base_lead_s = ((1.0 - lum.dim_level) * lum.ramp_up_s + (net.latency_ms + 3.0 * net.jitter_ms) / 1000.0
@@ -168,6 +210,7 @@ class DetectorLocated(DetectorPerFrame):
         full = windows_wait(ctx.sensors)
         self.windows = [TrackWindows(ctx.spec.k or PAPER_K, ctx.spec.n or PAPER_N, full_window=full)
                         for _ in ctx.camera_lamps]  # fmt: skip
+        self.ground = [CameraRays(det.camera) for det in self.detectors]
         self.lanes = [(lane.y_center_m - lane.width_m / 2 - LANE_SLACK_M, lane.y_center_m + lane.width_m / 2
                        + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
         self.blind_end_lamps = blind_end_lamps(ctx.street) if ctx.spec.light_blind_ends in (None, True) else []
@@ -185,14 +228,15 @@ class DetectorLocated(DetectorPerFrame):
         ways = {d for lo, hi, d in self.lanes if lo <= y_m <= hi}
         return speed * ways.pop() if len(ways) == 1 else None
 
-    def zones_for(self, x_m: float, vx_mps: float | None, cls: str) -> np.ndarray:
+    def zones_for(self, x_m: float, vx_mps: float | None, cls: str) -> list[int]:
         """The zones a target at ``x_m`` moving at ``vx_mps`` is in or enters within its lead time."""
         if vx_mps is None or abs(vx_mps) < STILL_MPS:
             lo_m, hi_m = x_m - UNKNOWN_DIRECTION_M, x_m + UNKNOWN_DIRECTION_M
         else:
             ahead_m = vx_mps * self.lead_s(cls)
             lo_m, hi_m = min(x_m, x_m + ahead_m), max(x_m, x_m + ahead_m)
-        return np.flatnonzero((self.zone_start_m <= hi_m) & (self.zone_end_m > lo_m))
+        # plain floats, compared as numpy compared them: a lamp's zone per ~100k placements an hour
+        return [j for j, (start_m, end_m) in enumerate(self.zone_bounds_m) if start_m <= hi_m and end_m > lo_m]
 
     def light_zones(self, camera_lamp: int, t_s: float, zones: Sequence[int]) -> None:
         """Light ``zones``: the camera's own lamp directly, the others by radio (repeated)."""
@@ -216,8 +260,10 @@ class DetectorLocated(DetectorPerFrame):
         """Put camera ``camera_index``'s confirmed target tracks on the street (with that camera's
         pose: its detector's) and light for them from the camera's lamp."""
         det = self.detectors[camera_index]
-        cam = det.camera
         window = self.windows[camera_index]
+        if not detections:  # most judged frames: the windows age, nothing is placed
+            window.update({})
+            return
         confirmed = window.update(keyed_marks(detections, det.target_threshold, window)[1])
         for d in detections:
             if d.track_id is None or d.track_id not in confirmed or not frame_hit(d, det.target_threshold):
@@ -229,12 +275,14 @@ class DetectorLocated(DetectorPerFrame):
                 ground_x_m, ground_y_m = d.ground_x_m, d.ground_y_m
             else:
                 x, y, w, h = d.box_px
-                ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]], dtype=np.float64))[0]
-                if not np.all(np.isfinite(ground)):
+                ground = self.ground[camera_index].ground_xy_m(x + w / 2 - 0.5, y + h - 0.5)
+                if ground is None:
                     continue
-                ground_x_m, ground_y_m = float(ground[0]), float(ground[1])
+                ground_x_m, ground_y_m = ground
             key = (camera_index, d.track_id)
-            track = self.tracks.setdefault(key, LocatedTrack(cls))
+            track = self.tracks.get(key)
+            if track is None:
+                track = self.tracks[key] = LocatedTrack(cls)
             # a track keeps the class carried furthest it was seen as: a car's class flips to cyclist,
             # group or pedestrian in glare, never the other way for long
             if EXTRAPOLATE_M.get(cls, 0.0) > EXTRAPOLATE_M.get(track.cls, 0.0):

@@ -98,6 +98,8 @@ class TrackWindows:
     def update(self, hits: dict) -> set:
         """Record one frame's ``{track key: target?}`` (None: ruled out this frame, no road user
         moves so: the track loses its hits); return the confirmed keys."""
+        if not hits and not self.bits and not self.seen:  # nothing in view, nothing remembered
+            return set()
         mask = self.mask
         bits = {key: b for key, b in ((key, (b << 1) & mask) for key, b in self.bits.items()) if b}
         for key, hit in hits.items():

@@ -56,9 +56,10 @@ class SensedTruth:
 class SensedFrame:
     """What fast mode passes where a frame would be: the camera's shape and its candidates' truth."""
 
+    __slots__ = ("shape", "sensors", "lamp_index", "_truth")
+
     def __init__(self, sensors, lamp_index: int):
-        cam = sensors.geometry.cameras[lamp_index]
-        self.shape = (cam.height_px, cam.width_px)
+        self.shape = sensors.frame_shapes[lamp_index]  # (height, width) px
         self.sensors = sensors
         self.lamp_index = lamp_index
         self._truth: tuple | None = None
@@ -67,7 +68,12 @@ class SensedFrame:
     def truth(self) -> tuple:
         if self._truth is None:
             s, i = self.sensors, self.lamp_index
-            idx = s.candidates_of(i).tolist()
-            self._truth = tuple(SensedTruth(s, i, j, bool(s.cand.forward_m[j, i] <= DETECTOR_RANGE_M)) for j in idx) \
-                if idx else ()  # fmt: skip
+            if not s.agents or not s.step_pairs().counts[i]:  # no candidate in view
+                self._truth = ()
+            else:  # the camera's candidates and their forward distances, from the step's lists
+                pairs = s.step_pairs()
+                first, end = pairs.bounds(i)
+                agents, forward_m = pairs.agents[first:end], pairs.forward_m[first:end]
+                self._truth = tuple(SensedTruth(s, i, j, f_m <= DETECTOR_RANGE_M)
+                                    for j, f_m in zip(agents, forward_m, strict=True))  # fmt: skip
         return self._truth

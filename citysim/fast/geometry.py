@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from citysim.control.camera_rays import CameraRays
 from citysim.world.agents import AgentState
 from citysim.world.street import Street
 
@@ -86,6 +87,7 @@ class CameraGeometry:
     def __init__(self, street: Street):
         cams = [site.camera for site in street.lamps]
         self.cameras = cams
+        self.rays = [CameraRays(c) for c in cams]
         self.pole_xy_m = np.array([[c.position_m[0], c.position_m[1]] for c in cams], dtype=np.float64)
         self.heading_xy = np.array([[c.heading_unit[0], c.heading_unit[1]] for c in cams], dtype=np.float64)
         self.half_fov_rad = np.array([math.radians(c.horizontal_fov_deg) / 2.0 for c in cams])
@@ -157,10 +159,9 @@ class CameraGeometry:
 
     def boxes_px(self, lamp_index: int, agents: Sequence[AgentState]) -> list[tuple[int, int, int, int]]:
         """``box_px`` of each of ``agents`` in camera ``lamp_index``, their points projected in one call."""
-        cam = self.cameras[lamp_index]
         pts = np.array([p for a in agents for p in ((a.x_m, a.y_m, 0.0), (a.x_m, a.y_m, a.height_m))],
                        dtype=np.float64).reshape(-1, 3)  # fmt: skip
-        uv = cam.project(pts).tolist()
+        uv = self.rays[lamp_index].project_px(pts)  # the camera's ``project``, its per-call cost left out
         boxes = []
         for n, agent in enumerate(agents):
             (u0, v0), (_, v1) = uv[2 * n], uv[2 * n + 1]

@@ -25,6 +25,9 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
     lamp_states = controller.ctx.lamp_states
     n = len(lamps)
     watch = [list(range(max(0, i - 1), min(n, i + 2))) for i in range(n)]
+    # bound once: the loop below runs per camera per frame (~300k times an hour)
+    on_frame, in_motion = controller.on_frame, _motion_of(controller, n)
+    collect = [collector.on_frame for collector in collectors]
     k = 0
     while True:
         yield env.timeout(max(0.0, k / fps - env.now))
@@ -32,28 +35,37 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
         agents = night.agents
         every = stride <= 1 or k % stride == 0
         any_ramping = lamp_states.any_ramping(t)
-        if not every and not agents and not _any_motion(controller, n) and not any_ramping:
+        # each camera's motion, read before any is judged (a camera's own frame is what changes it)
+        moving = None if every else in_motion()
+        if not every and not agents and not any(moving) and not any_ramping:
             k += 1  # a still street with nothing moving in view: no camera is judged
             continue
         ramping = lamp_states.ramping(t)
         rows = night.replay.rows_of(agents) if night.replay is not None else None
         sensors.observe(k, agents, lamp_states.levels_at(t), rows)
         awake = sensors.awake_cameras()
-        for i in range(n):
-            if not (every or awake[i] or controller.motion_seen(i)
-                    or (any_ramping and any(ramping[j] for j in watch[i]))):  # fmt: skip
-                continue
+        # what decides whether a camera is judged was read above, before any camera is judged
+        if every:
+            judged = range(n)
+        elif any_ramping:
+            judged = [i for i in range(n) if awake[i] or moving[i] or any(ramping[j] for j in watch[i])]
+        else:
+            judged = [i for i, (woken, seen) in enumerate(zip(awake, moving, strict=True)) if woken or seen]
+        for i in judged:
             frame = SensedFrame(sensors, i)
-            detections = controller.on_frame(i, t, frame)
-            if collectors:
+            detections = on_frame(i, t, frame)
+            if collect:
                 truth = frame.truth if detections is not None else ()
-                for collector in collectors:
-                    collector.on_frame(i, t, truth, detections)
+                for collector_on_frame in collect:
+                    collector_on_frame(i, t, truth, detections)
         k += 1
 
 
-def _any_motion(controller, n: int) -> bool:
-    return any(controller.motion_seen(i) for i in range(n))
+def _motion_of(controller, n: int):
+    """A function giving ``controller.motion_seen`` of every camera: its ``cameras_in_motion`` when
+    it has one (one call a frame, not one per camera)."""
+    batch = getattr(controller, "cameras_in_motion", None)
+    return batch if batch is not None else lambda: [controller.motion_seen(i) for i in range(n)]
 
 
 def fast_sensors(night, model) -> FastSensors:

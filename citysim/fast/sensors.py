@@ -14,14 +14,15 @@ judged, so a seed gives the same detections bit for bit.
 
 from __future__ import annotations
 
+import bisect
 import math
-from collections import deque
 
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
+from citysim.fast.drawn import SensedTracker, drawn_detection
 from citysim.fast.frame import SensedFrame
-from citysim.fast.geometry import CameraGeometry, LevelChanges, beam_id, beam_x_m
+from citysim.fast.geometry import CameraGeometry, Candidates, LevelChanges, beam_id, beam_x_m
 from citysim.fast.model import (
     BEAM,
     KINDS,
@@ -33,15 +34,13 @@ from citysim.fast.model import (
     threshold_conditions,
     threshold_key,
 )
+from citysim.fast.pairs import CandidatePairs, StepPairs
 from citysim.fast.records import is_young
 from citysim.fast.steps import StepGeometries
 from detector.detector import Detection
 from detector.segment import SegmenterParams
 
-#: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
-DRAWN_P_TARGET = 0.9
 _NO_INDICES = np.zeros(0, np.int64)
-_NO_LIGHT = np.zeros(0, np.float64)
 #: A hit standing more than this ahead of its road user (m) is its light's patch, not its body.
 AHEAD_OF_BODY_M = 2.0
 
@@ -56,11 +55,14 @@ class FastSensors:
     def __init__(self, model: SensorModel, street, rngs: list[np.random.Generator], fps: float):
         self.model = model
         self.geometry = CameraGeometry(street)
+        self.frame_shapes = [(cam.height_px, cam.width_px) for cam in self.geometry.cameras]
         self.rngs = rngs
         self.fps = fps
         self.p_hit = model.p_hit_array()
+        self.p_hit_flat: list[float] = self.p_hit.ravel().tolist()  # read per pair (``StepPairs.p_hit``)
         self.persistence = np.array([model.persistence.get(k, 0.0) for k in KINDS])
-        self.class_cdf = {k: np.cumsum(v) for k, v in model.class_given_hit.items()}
+        self.persistence_list: list[float] = self.persistence.tolist()
+        self.class_cdf = {k: np.cumsum(v).tolist() for k, v in model.class_given_hit.items()}
         self.area_samples = {k: np.sort(np.asarray(v, dtype=np.float64)) for k, v in model.area_fraction.items()}
         self._samples_by_key: dict[tuple, np.ndarray | None] = {}
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
@@ -70,19 +72,16 @@ class FastSensors:
         #: when the lamps' levels last changed: only the threshold baselines' segmenters read it, so
         #: it is kept (every observed frame) only once one of them is made
         self.changes: LevelChanges | None = None
-        self.steps = StepGeometries(self.geometry)
+        self.steps = StepGeometries(self.geometry, self.p_hit.shape)
         #: the agents' geometry this frame (``citysim.fast.steps``); ``cand`` its candidates
         self.step = self.steps.of([], None)
-        self.cand = self.step.cand
-        self.light = np.zeros(0)
         self._boxes: dict[tuple[int, int], tuple[int, int, int, int]] = {}
-        #: per ``cand`` matrix ("seen", "beam_seen"), this step: the agents it marks, camera by camera,
-        #: and where each camera's start in them (``_indices_seen``)
-        self._seen_by_camera: dict[str, tuple[np.ndarray, list[int]]] = {}
-        self._camera_bounds = np.arange(self.geometry.n + 1)
+        #: per ``cand`` matrix ("seen", "beam_seen"), this step: the pairs it marks, camera by camera
+        self._pairs: dict[str, CandidatePairs] = {}
+        self._step_pairs: StepPairs | None = None  # this step's candidate pairs as lists
         self._awake: list[bool] | None = None
-        self._lit_cells: np.ndarray | None = None
         self._lamps_lit: list[int] | None = None  # ``lit`` of every lamp this frame, on first ask
+        self._lit_levels: np.ndarray | None = None  # the levels it was read from
 
     def detectors(self, ctx, threshold: float) -> list[SensedDetector]:
         return [SensedDetector(self, i, threshold) for i in range(self.geometry.n)]
@@ -99,25 +98,26 @@ class FastSensors:
             # an empty street has no candidates, whichever empty list the step gave
             if agents or self.agents:
                 self.step = self.steps.of(agents, rows)
-                self.cand = self.step.cand
             self.agents = agents
             self._boxes = {}
-            self._seen_by_camera = {}
+            self._pairs = {}
+            self._step_pairs = None
             self._awake = None
         self.levels = levels
         if self.changes is not None:
             self.changes.update(frame_k / self.fps, levels)
-        if agents:  # the level of the lamp nearest each agent
-            self.light = np.asarray(levels, dtype=np.float64)[self.step.nearest_lamp]
-        else:
-            self.light = _NO_LIGHT
-        self._lit_cells = None
-        self._lamps_lit = None
+        if levels is not self._lit_levels or levels.flags.writeable:
+            self._lamps_lit = None  # a read-only array seen before (``LampStates``'): no level changed
+
+    @property
+    def cand(self) -> Candidates:
+        """This step's candidates (``citysim.fast.geometry``)."""
+        return self.step.cand
 
     def awake_cameras(self) -> list[bool]:
         """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
         if self._awake is None:
-            self._awake = self.cand.awake.tolist()
+            self._awake = self.step.awake() if self.agents else [False] * self.geometry.n
         return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
@@ -126,30 +126,29 @@ class FastSensors:
 
     def beams_of(self, lamp_index: int) -> np.ndarray:
         """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
+        if not self.agents or not self.step_pairs().beams:  # most steps: no beam in any camera's view
+            return _NO_INDICES
         return self._indices_seen("beam_seen", lamp_index)
 
     def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
-        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index``: every camera's found in
-        one pass once a step (the detector and the segmenter of each judged frame both ask)."""
+        """The candidates ``cand.<matrix>`` marks for camera ``lamp_index`` (ascending)."""
         if not self.agents:
             return _NO_INDICES
-        seen = self._seen_by_camera.get(matrix)
-        if seen is None:  # the marks camera by camera, each camera's agents in ascending order
-            cameras, agents = np.nonzero(getattr(self.cand, matrix).T)
-            seen = self._seen_by_camera[matrix] = (agents, np.searchsorted(cameras, self._camera_bounds).tolist())
-        agents, starts = seen
-        return agents[starts[lamp_index] : starts[lamp_index + 1]]
+        return self.pairs(matrix).of(lamp_index)
 
-    def p_hit_of(self, lamp_index: int, idx: np.ndarray, young: bool) -> np.ndarray:
-        """P(hit) of camera ``lamp_index``'s candidates ``idx`` in this frame, from the model's cell.
+    def pairs(self, matrix: str) -> CandidatePairs:
+        """The (agent, camera) pairs ``cand.<matrix>`` marks this step, as index arrays: every
+        camera's found in one pass once a step."""
+        pairs = self._pairs.get(matrix)
+        if pairs is None:
+            pairs = self._pairs[matrix] = CandidatePairs(getattr(self.cand, matrix), self.geometry.n)
+        return pairs
 
-        The cells of every agent for every camera are binned once per step (``StepGeometry.cells``,
-        not one per camera); the light bin once per frame's levels."""
-        if self._lit_cells is None:
-            self._lit_cells = (self.light >= LIT_LEVEL).astype(np.int64)
-        kind, distance, bearing, speed = self.step.cells
-        return self.p_hit[kind[idx], distance[idx, lamp_index], bearing[idx, lamp_index], self._lit_cells[idx],
-                          int(young), speed[idx]]  # fmt: skip
+    def step_pairs(self) -> StepPairs:
+        """This step's candidates ("seen" pairs) of every camera as lists (``citysim.fast.pairs``)."""
+        if self._step_pairs is None:
+            self._step_pairs = self.step.pairs(self.p_hit.shape)
+        return self._step_pairs
 
     def box_px(self, lamp_index: int, agent_index: int) -> tuple[int, int, int, int]:
         """Agent ``agent_index``'s box in camera ``lamp_index`` this frame; the first ask projects
@@ -157,7 +156,9 @@ class FastSensors:
         the frame's truth is scored)."""
         key = (lamp_index, agent_index)
         if key not in self._boxes:
-            idx = self.candidates_of(lamp_index).tolist()
+            pairs = self.step_pairs()
+            first, end = pairs.bounds(lamp_index)
+            idx = pairs.agents[first:end]
             if agent_index not in idx:
                 idx = [agent_index]
             for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
@@ -175,9 +176,14 @@ class FastSensors:
 
     def lit(self, lamp_index: int) -> int:
         """1 when lamp ``lamp_index`` is lit this frame, else 0 (every lamp's read once per frame)."""
+        return self.lamps_lit()[lamp_index]
+
+    def lamps_lit(self) -> list[int]:
+        """``lit`` of every lamp this frame (its light bin: the level as float64 against ``LIT_LEVEL``)."""
         if self._lamps_lit is None:
-            self._lamps_lit = (self.levels >= LIT_LEVEL).astype(int).tolist()
-        return self._lamps_lit[lamp_index]
+            self._lamps_lit = (np.asarray(self.levels, dtype=np.float64) >= LIT_LEVEL).astype(int).tolist()
+            self._lit_levels = self.levels
+        return self._lamps_lit
 
 
 class _LearningRate:
@@ -195,28 +201,6 @@ class _LearningRate:
         """Nothing to forget: a young background shows in the learning rate fast mode is given."""
 
 
-class SensedTracker:
-    """Per track, the last n frames' hits; confirmed at k of them (``detector.confirm.Tracker``'s
-    defaults: 2 of 6). A track unseen for more than 3 frames starts over, as a dropped one would."""
-
-    def __init__(self, k: int = 2, n: int = 6, max_missed_frames: int = 3):
-        self.k, self.n, self.max_missed = k, n, max_missed_frames
-        self.history: dict[int, tuple[int, deque]] = {}
-
-    def update(self, frame_k: int, track_id: int, hit: bool) -> None:
-        last_k, hist = self.history.get(track_id, (None, None))
-        if hist is None or frame_k - last_k > self.max_missed + 1:
-            hist = deque(maxlen=self.n)
-        hist.append(hit)
-        self.history[track_id] = (frame_k, hist)
-        if len(self.history) > 256:  # forget tracks long gone
-            self.history = {t: v for t, v in self.history.items() if frame_k - v[0] <= self.max_missed + 1}
-
-    def is_confirmed(self, track_id: int) -> bool:
-        entry = self.history.get(track_id)
-        return entry is not None and sum(entry[1]) >= self.k
-
-
 class SensedDetector:
     """One camera's detector in fast mode: per judged frame, calibrated target draws per candidate
     (a Markov chain per candidate: misses come in streaks) and false-alarm episodes."""
@@ -232,6 +216,7 @@ class SensedDetector:
         self.last_regions: tuple = ()
         self.previous: dict[int, tuple[int, bool]] = {}  # object id -> (frame, hit)
         self.fa_left = 0
+        self.fa_may_start = bool(sensors.model.fa_reports)  # else ``_false_alarm`` draws nothing, reports nothing
         self.fa_report: tuple | None = None
         self.fa_track = 0
 
@@ -243,48 +228,62 @@ class SensedDetector:
 
     def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
-        idx = s.candidates_of(i)
-        detections = self._candidates(idx, k, is_young(learning_rate)) if len(idx) else []
-        beams = s.beams_of(i)
+        lamps_lit = s.lamps_lit()
+        pairs = s.step_pairs() if s.agents else None  # None: an empty street
+        seen = pairs is not None and pairs.counts[i] > 0
+        detections = self._candidates(k, is_young(learning_rate), lamps_lit) if seen else []
+        beams = s.beams_of(i) if pairs is not None and pairs.beams else _NO_INDICES
         if len(beams):
             detections += self._beams(beams, k, is_young(learning_rate))
-        fa = self._false_alarm(k)
+        lit = lamps_lit[i]
+        if self.fa_left == 0 and self.fa_may_start and self.rng.random() < s.model.fa_start_p[lit]:
+            self._start_false_alarm()
+        fa = self._false_alarm(k) if self.fa_left else None
         if fa is not None:
             detections.append(fa)
-        busy = len(idx) > 0 or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[s.lit(i)]
+        busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
         self.last_regions = (True,) if busy else ()
         return detections
 
-    def _candidates(self, idx: np.ndarray, k: int, young: bool) -> list[Detection]:
+    def _candidates(self, k: int, young: bool, lamps_lit: list[int]) -> list[Detection]:
+        """Frame ``k``'s draws for the camera's candidates (``young``: its background is young;
+        ``lamps_lit``: ``FastSensors.lamps_lit``)."""
         s, i = self.sensors, self.lamp_index
-        agents = [s.agents[j] for j in idx.tolist()]
-        kinds = np.array([KINDS.index(a.cls) for a in agents])
-        fwd = s.cand.forward_m[idx, i]
-        hits = self._chain_draws([a.object_id for a in agents], s.p_hit_of(i, idx, young), s.persistence[kinds], k)
-        out = [self._hit_detection(a, int(idx[n]), float(fwd[n]), self._drawn_class(a.cls))
+        pairs = s.step_pairs()
+        first, end = pairs.bounds(i)
+        idx = pairs.agents[first:end]
+        agents = [s.agents[j] for j in idx]
+        fwd = pairs.forward_m[first:end]
+        p = pairs.p_hit(i, s.p_hit_flat, lamps_lit, young)
+        rho = [s.persistence_list[kind] for kind in pairs.kind[first:end]]
+        hits = self._chain_draws([a.object_id for a in agents], p, rho, k)
+        out = [self._hit_detection(a, idx[n], fwd[n], self._drawn_class(a.cls))
                for n, a in enumerate(agents) if hits[n]]  # fmt: skip
         if len(self.previous) > 512:
             self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
         return out
 
-    def _chain_draws(self, keys: list[int], p: np.ndarray, rho: np.ndarray, k: int) -> list[bool]:
+    def _chain_draws(self, keys: list[int], p: list[float], rho: list[float], k: int) -> list[bool]:
         """Frame ``k``'s hits of the candidates ``keys`` (object or beam ids): each a two-state chain
         with the cell's P and its kind's persistence ``rho``, stepped from the last frame's draw;
-        every draw is kept for the next frame and told to the k-of-n tracker."""
+        every draw is kept for the next frame and told to the k-of-n tracker. Plain floats: the
+        same IEEE operations numpy's float64 did, a tenth of the cost on a frame's few candidates."""
+        previous = self.previous
         for n, key in enumerate(keys):
-            prev = self.previous.get(key)
+            prev = previous.get(key)
             if prev is not None and prev[0] == k - 1:  # the chain's step from the last frame's draw
                 p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
-        hits = (self.rng.random(len(keys)) < p).tolist()
+        hits = [draw < p_hit for draw, p_hit in zip(self.rng.random(len(keys)).tolist(), p, strict=True)]
+        update = self.tracker.update
         for key, hit in zip(keys, hits, strict=True):
-            self.previous[key] = (k, hit)
-            self.tracker.update(k, key, hit)
+            previous[key] = (k, hit)
+            update(k, key, hit)
         return hits
 
     def _drawn_class(self, kind: str) -> str:
         """The detector class a hit of ``kind`` is reported as, drawn from calibration's shares."""
-        cdf = self.sensors.class_cdf.get(kind)
-        return DETECTOR_CLASSES[int(np.searchsorted(cdf, self.rng.random(), side="right")) if cdf is not None else 0]
+        cdf = self.sensors.class_cdf.get(kind)  # bisect_right on a sorted list: searchsorted(side="right")
+        return DETECTOR_CLASSES[bisect.bisect_right(cdf, self.rng.random()) if cdf is not None else 0]
 
     def _hit_detection(self, agent, agent_index: int, forward_m: float, cls: str) -> Detection:
         """A hit where the real detector puts it: on the road user's body, or (a sample of how far
@@ -294,9 +293,9 @@ class SensedDetector:
         samples = s.ahead_samples.get(agent.cls)
         ahead_m = float(samples[int(self.rng.integers(len(samples)))]) if samples is not None else 0.0
         if ahead_m < AHEAD_OF_BODY_M:
-            return _detection(s.box_px(self.lamp_index, agent_index), forward_m, cls, agent.object_id)
+            return drawn_detection(s.box_px(self.lamp_index, agent_index), forward_m, cls, agent.object_id)
         box = s.geometry.beam_box_px(self.lamp_index, agent, ahead_m)
-        return _detection(box, forward_m + ahead_m, cls, agent.object_id)
+        return drawn_detection(box, forward_m + ahead_m, cls, agent.object_id)
 
     def _beams(self, idx: np.ndarray, k: int, young: bool) -> list[Detection]:
         """Draws for the beams of road users out of view (kind ``BEAM``, each its own chain and
@@ -308,31 +307,26 @@ class SensedDetector:
         cells = cell_of(np.full(len(agents), kind), fwd, s.cand.beam_bearing_rad[idx, i], light,
                         np.full(len(agents), young), np.array([a.speed_mps for a in agents]))  # fmt: skip
         keys = [beam_id(a.object_id) for a in agents]
-        hits = self._chain_draws(keys, s.p_hit[cells], np.full(len(agents), s.persistence[kind]), k)
-        return [_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), self._drawn_class(BEAM), keys[n])
+        hits = self._chain_draws(keys, s.p_hit[cells].tolist(), [float(s.persistence[kind])] * len(agents), k)
+        return [drawn_detection(s.geometry.beam_box_px(i, a), float(fwd[n]), self._drawn_class(BEAM), keys[n])
                 for n, a in enumerate(agents) if hits[n]]  # fmt: skip
 
-    def _false_alarm(self, k: int) -> Detection | None:
+    def _start_false_alarm(self) -> None:
+        """A false-alarm episode starts: its length (frames) and report drawn from calibration's."""
         model = self.sensors.model
-        if self.fa_left == 0 and model.fa_reports:
-            if self.rng.random() < model.fa_start_p[self.sensors.lit(self.lamp_index)]:
-                lengths = model.fa_length_frames
-                self.fa_left = int(lengths[int(self.rng.integers(len(lengths)))])
-                self.fa_report = tuple(model.fa_reports[int(self.rng.integers(len(model.fa_reports)))])
-                self.fa_track -= 1  # negative ids: never an agent's
+        lengths = model.fa_length_frames
+        self.fa_left = int(lengths[int(self.rng.integers(len(lengths)))])
+        self.fa_report = tuple(model.fa_reports[int(self.rng.integers(len(model.fa_reports)))])
+        self.fa_track -= 1  # negative ids: never an agent's
+
+    def _false_alarm(self, k: int) -> Detection | None:
+        """Frame ``k``'s report of the running false-alarm episode (None once it has ended)."""
         if self.fa_left == 0:
             return None
         self.fa_left -= 1
         distance_m, x, y, w, h, cls = self.fa_report
         self.tracker.update(k, self.fa_track, True)
-        return _detection((int(x), int(y), int(w), int(h)), distance_m, DETECTOR_CLASSES[int(cls)], self.fa_track)
-
-
-def _detection(box_px, distance_m: float, cls: str, track_id: int) -> Detection:
-    features = np.array([0.0, 0.0, 0.0, distance_m, 0.0, 0.0])
-    probabilities = np.array([1.0 - DRAWN_P_TARGET if c == "noise" else 0.0 for c in DETECTOR_CLASSES])
-    probabilities[DETECTOR_CLASSES.index(cls)] += DRAWN_P_TARGET if cls != "noise" else 0.0
-    return Detection(tuple(box_px), features, cls, probabilities, DRAWN_P_TARGET, track_id)
+        return drawn_detection((int(x), int(y), int(w), int(h)), distance_m, DETECTOR_CLASSES[int(cls)], self.fa_track)
 
 
 class _Areas:

@@ -19,6 +19,7 @@ from citysim.metrics.collector import Collector
 
 #: Detector class order (detector.classes.CLASSES): rows/columns of ``confusion_5``.
 CONFUSION_CLASSES = DETECTOR_CLASSES
+_CLASS_INDEX = {cls: i for i, cls in enumerate(CONFUSION_CLASSES)}
 #: The detector's target classes: passes are counted per class it should call them.
 _TARGET_DETECTOR_CLASSES = DETECTOR_CLASSES[1:]
 
@@ -84,6 +85,35 @@ def greedy_match(iou: np.ndarray, threshold: float) -> list[tuple[int, int]]:
     return pairs
 
 
+def match_boxes(boxes_a: Sequence, boxes_b: Sequence, threshold: float) -> list[tuple[int, int]]:
+    """``greedy_match(iou_matrix(boxes_a, boxes_b), threshold)`` on plain floats, for a frame's few
+    boxes (numpy's per-call cost was most of the scoring). The same IEEE operations in the same
+    order give the same IoUs; Python's sort is stable, as the matrix's argsort, so ties are taken
+    in the same (row-major) order and the pairs are the same."""
+    ious: list[float] = []
+    for ax, ay, aw, ah in boxes_a:
+        ax, ay, aw, ah = float(ax), float(ay), float(aw), float(ah)
+        for bx, by, bw, bh in boxes_b:
+            bx, by, bw, bh = float(bx), float(by), float(bw), float(bh)
+            iw = max(min(ax + aw, bx + bw) - max(ax, bx), 0.0)
+            ih = max(min(ay + ah, by + bh) - max(ay, by), 0.0)
+            inter = iw * ih
+            union = aw * ah + bw * bh - inter
+            ious.append(inter / union if union > 0 else 0.0)
+    n_b = len(boxes_b)
+    pairs: list[tuple[int, int]] = []
+    used_r, used_c = set(), set()
+    for flat in sorted(range(len(ious)), key=lambda k: -ious[k]):
+        if ious[flat] < threshold:
+            break
+        r, c = divmod(flat, n_b)
+        if r not in used_r and c not in used_c:
+            pairs.append((r, c))
+            used_r.add(r)
+            used_c.add(c)
+    return pairs
+
+
 @dataclass
 class _Pass:
     cls: str
@@ -114,14 +144,21 @@ class DetectionConfusion:
         self.iou_threshold = iou_threshold
         self.target_threshold = target_threshold
         self.pass_gap_s = pass_gap_s
-        self.confusion_5 = np.zeros(
-            (len(CONFUSION_CLASSES), len(CONFUSION_CLASSES)), dtype=np.int64
-        )
+        # counted in plain ints (a numpy element's += cost ~10x): ``confusion_5`` is its array
+        self._confusion = [[0] * len(CONFUSION_CLASSES) for _ in CONFUSION_CLASSES]
         self.tp = self.fp = self.fn = self.tn = 0
         self.frames = self.regions = self.noise_regions = 0
         self._passes: dict[int, dict[int, _Pass]] = {}
+        #: per lamp, at most the earliest last sighting of its passes (a sighting only moves it later):
+        #: the frames before any pass can end skip the scan of them (``_end_passes``)
+        self._earliest_seen_s: dict[int, float] = {}
         # detector class -> [eligible, missed]
         self._pass_counts = {c: [0, 0] for c in _TARGET_DETECTOR_CLASSES}
+
+    @property
+    def confusion_5(self) -> np.ndarray:
+        """Counts of (truth class, detected class), rows and columns ``CONFUSION_CLASSES``."""
+        return np.array(self._confusion, dtype=np.int64)
 
     @staticmethod
     def _index(cls: str, field_name: str) -> int:
@@ -141,15 +178,24 @@ class DetectionConfusion:
         """Count one frame of lamp ``lamp_index``'s camera at ``t_s`` (s)."""
         if not truth and not detections:  # most judged frames: nothing to count but the frame
             self.frames += 1
-            self._end_passes(lamp_index, t_s)
+            if self._passes.get(lamp_index):
+                self._end_passes(lamp_index, t_s)
             return
+        if not detections:  # a frame with road users in view and no detection: only misses to count
+            self._add_unseen(truth, lamp_index, t_s)
+            return
+        self._add_matched(truth, detections, lamp_index, t_s)
+
+    def _add_matched(self, truth: Sequence[TruthLike], detections: Sequence[DetectionLike], lamp_index: int,
+                     t_s: float) -> None:  # fmt: skip
+        """``add`` of a frame with detections: matched to the truth boxes, each counted."""
         truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [self._index(d.cls, "detections.cls") for d in detections]
         det_target = [d.p_target >= self.target_threshold for d in detections]
         pairs: list[tuple[int, int]] = []
         if truth and detections:  # without both, nothing to match, no IoU to compute
-            iou = iou_matrix([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections])
-            pairs = greedy_match(iou, self.iou_threshold)
+            pairs = match_boxes([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections],
+                                self.iou_threshold)
         self.frames += 1
         self.regions += len(detections)
         matched_truth = dict(pairs)
@@ -172,21 +218,51 @@ class DetectionConfusion:
                 p = None
             if p is None:
                 p = passes[t.object_id] = _Pass(truth_cls[r], t_s)
+                self._seen_since(lamp_index, t_s)
             p.last_seen_s = t_s
             p.fully_seen |= bool(t.fully_visible)
             p.detected |= c is not None and det_target[c]
         self._end_passes(lamp_index, t_s)
 
+    def _add_unseen(self, truth: Sequence[TruthLike], lamp_index: int, t_s: float) -> None:
+        """``add`` of a frame without detections: each fully visible road user a miss, passes kept."""
+        self.frames += 1
+        passes = self._passes.setdefault(lamp_index, {})
+        for t in truth:
+            truth_cls = scored_as(t.cls)
+            if truth_cls == "noise":
+                continue
+            if t.fully_visible:
+                self._count(truth_cls, 0, False)
+            p = passes.get(t.object_id)
+            if p is not None and t_s - p.last_seen_s > self.pass_gap_s:
+                self._end_pass(p)  # back in view after a gap: that was one pass, this is another
+                p = None
+            if p is None:
+                p = passes[t.object_id] = _Pass(truth_cls, t_s)
+                self._seen_since(lamp_index, t_s)
+            p.last_seen_s = t_s
+            p.fully_seen |= bool(t.fully_visible)
+        self._end_passes(lamp_index, t_s)
+
     def _end_passes(self, lamp_index: int, t_s: float) -> None:
         """End lamp ``lamp_index``'s passes unseen for more than ``pass_gap_s`` at ``t_s``."""
         passes = self._passes.get(lamp_index)
-        if not passes:
-            return
+        if not passes or t_s - self._earliest_seen_s[lamp_index] <= self.pass_gap_s:
+            return  # none unseen long enough: t_s - last_seen_s is at most t_s - the earliest (IEEE)
         for object_id in [i for i, p in passes.items() if t_s - p.last_seen_s > self.pass_gap_s]:
             self._end_pass(passes.pop(object_id))
+        if passes:
+            self._earliest_seen_s[lamp_index] = min(p.last_seen_s for p in passes.values())
+        else:
+            del self._earliest_seen_s[lamp_index]
+
+    def _seen_since(self, lamp_index: int, t_s: float) -> None:
+        """A pass of lamp ``lamp_index`` began at ``t_s``: keep the earliest last sighting a lower bound."""
+        self._earliest_seen_s[lamp_index] = min(self._earliest_seen_s.get(lamp_index, t_s), t_s)
 
     def _count(self, truth_cls: str, pred_index: int, pred_target: bool) -> None:
-        self.confusion_5[CONFUSION_CLASSES.index(truth_cls), pred_index] += 1
+        self._confusion[_CLASS_INDEX[truth_cls]][pred_index] += 1
         if truth_cls == "noise":
             self.noise_regions += 1
             self.fp += int(pred_target)

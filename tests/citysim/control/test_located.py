@@ -132,3 +132,25 @@ def test_the_first_lamp_whose_approach_no_camera_sees_is_kept_lit_and_only_it():
     off = build_controller(build_night(scenario), ControllerSpec(name="detector_located", light_blind_ends=False))
     off.on_physics_step(0.0, [])
     assert all(lamp.target_level < 1.0 for lamp in off.ctx.lamps)
+
+
+def test_the_line_slope_is_polyfits():
+    from citysim.control import located
+
+    assert located._lstsq is not None  # this numpy's least squares is called directly
+    rng = np.random.default_rng(5)
+    for n in list(range(3, 40)) * 20:
+        ts = np.cumsum(rng.uniform(0.05, 0.2, n))
+        xs = rng.uniform(-50, 400, 1) + rng.normal(0, 8, 1) * ts + rng.normal(0, 0.3, n)
+        assert located.line_slope(ts - ts[0], xs) == float(np.polyfit(ts - ts[0], xs, 1)[0])
+
+
+def test_the_recent_positions_are_those_at_or_after_the_time():
+    from citysim.control.located import LocatedTrack
+
+    track = LocatedTrack("pedestrian")
+    for k in range(100):  # more than the 64 kept; two sightings in some frames
+        for _ in range(1 + (k % 7 == 0)):
+            track.observe(k / 15, 0.1 * k)
+    for since_s in (-1.0, 3.0, 5.8, 6.0, 6.6, 7.0):
+        assert track.recent(since_s) == [(t, x) for t, x in track.seen if t >= since_s]

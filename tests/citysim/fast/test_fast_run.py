@@ -137,12 +137,12 @@ def test_a_hit_stands_as_far_ahead_of_its_road_user_as_calibration_found():
     sensors = fast_sensors(night, model)
     cam = sensors.geometry.cameras[0]
     x0 = float(cam.position_m[0])
-    car = AgentState(7, "vehicle", x0 + 4.0, -1.6, 0.0, 10.0, 4.5, 1.8, 1.5, light_on=True)
+    car = AgentState(7, "vehicle", x0 + 8.0, -1.6, 0.0, 10.0, 4.5, 1.8, 1.5, light_on=True)  # camera 0's candidate
     sensors.observe(0, [car], np.full(3, 0.2))
-    (det,) = sensors.detectors(None, 0.5)[0]._candidates(np.array([0]), 0, False)
+    (det,) = sensors.detectors(None, 0.5)[0]._candidates(0, False, sensors.lamps_lit())
     x, y, w, h = det.box_px
     ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]]))[0]
-    assert ground[0] == pytest.approx(x0 + 19.0, abs=0.5) and ground[1] == pytest.approx(-1.6, abs=0.5)
+    assert ground[0] == pytest.approx(x0 + 23.0, abs=0.5) and ground[1] == pytest.approx(-1.6, abs=0.5)
 
 
 @pytest.mark.parametrize("keep", [0.0, 0.95])

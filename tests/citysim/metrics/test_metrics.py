@@ -362,3 +362,49 @@ def test_tracker_state_stays_bounded_as_objects_come_and_go():
     s = tracker.summary()["overall"]
     assert s["objects"] == 100 and s["visits"] == 100 * 3
     assert s["unlit_crossings"] == 100  # every pedestrian crosses the dim middle zone
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_matching_on_plain_floats_pairs_as_the_iou_matrix_does(seed):
+    # small integer boxes on a small grid: many equal IoUs (ties), empty overlaps and zero-area boxes
+    from citysim.metrics.confusion import greedy_match, iou_matrix, match_boxes
+
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        a = [tuple(int(v) for v in row) for row in rng.integers(0, 6, size=(int(rng.integers(1, 5)), 4))]
+        b = [tuple(int(v) for v in row) for row in rng.integers(0, 6, size=(int(rng.integers(1, 5)), 4))]
+        for threshold in (0.0, 0.3, 0.5):
+            assert match_boxes(a, b, threshold) == greedy_match(iou_matrix(a, b), threshold)
+
+
+class _EveryFrameMatched(DetectionConfusion):
+    """The slow path: every frame matched (no shortcut for frames without detections) and every
+    frame's passes scanned for ended ones."""
+
+    def add(self, truth, detections, lamp_index, t_s):
+        self._add_matched(truth, detections, lamp_index, t_s)
+
+    def _end_passes(self, lamp_index, t_s):
+        passes = self._passes.get(lamp_index, {})
+        for object_id in [i for i, p in passes.items() if t_s - p.last_seen_s > self.pass_gap_s]:
+            self._end_pass(passes.pop(object_id))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_shortcuts_count_as_matching_every_frame_does(seed):
+    # road users coming and going in the views of 3 cameras, now and then detected, at 15 fps
+    rng = np.random.default_rng(seed)
+    fast, slow = DetectionConfusion(), _EveryFrameMatched()
+    classes = ["pedestrian", "cyclist", "vehicle", "group", "dog"]
+    for frame in range(3000):
+        t_s = frame / 15
+        for lamp in range(3):
+            in_view = [i for i in range(8) if rng.random() < 0.15]
+            truth = [Truth(i, classes[i % 5], 10 * i, 0, 20, 40, fully_visible=bool(rng.random() < 0.7)) for i in in_view]
+            dets = [Det((10 * i + int(rng.integers(-3, 4)), 0, 20, 40), "pedestrian", float(rng.random()))
+                    for i in in_view if rng.random() < 0.3]  # fmt: skip
+            for conf in (fast, slow):
+                conf.add(truth, dets, lamp, t_s)
+    for conf in (fast, slow):
+        conf.finish()
+    assert fast.summary() == slow.summary() and fast.summary()["object_passes"] > 50

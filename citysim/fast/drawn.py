@@ -1,0 +1,67 @@
+"""The detections and tracker state fast mode's detector stand-in (``citysim.fast.sensors``) hands out.
+
+``drawn_detection`` builds a ``detector.detector.Detection`` for a drawn hit; ``SensedTracker``
+keeps the k-of-n state the real detector's light box tracker would.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from citysim.config.kinds import DETECTOR_CLASSES
+from detector.detector import Detection
+
+#: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
+DRAWN_P_TARGET = 0.9
+
+
+class SensedTracker:
+    """Per track, the last n frames' hits; confirmed at k of them (``detector.confirm.Tracker``'s
+    defaults: 2 of 6). A track unseen for more than 3 frames starts over, as a dropped one would.
+    The hits are kept as the low n bits of an int (the latest the lowest): told every drawn
+    candidate's every frame, a deque per track cost more than the draw."""
+
+    def __init__(self, k: int = 2, n: int = 6, max_missed_frames: int = 3):
+        self.k, self.n, self.max_missed = k, n, max_missed_frames
+        self.mask = (1 << n) - 1
+        self.history: dict[int, tuple[int, int]] = {}  # track -> (last frame, hit bits)
+
+    def update(self, frame_k: int, track_id: int, hit: bool) -> None:
+        last_k, bits = self.history.get(track_id, (None, 0))
+        if last_k is None or frame_k - last_k > self.max_missed + 1:
+            bits = 0
+        self.history[track_id] = (frame_k, ((bits << 1) | bool(hit)) & self.mask)
+        if len(self.history) > 256:  # forget tracks long gone
+            self.history = {t: v for t, v in self.history.items() if frame_k - v[0] <= self.max_missed + 1}
+
+    def is_confirmed(self, track_id: int) -> bool:
+        entry = self.history.get(track_id)
+        return entry is not None and entry[1].bit_count() >= self.k
+
+
+def drawn_detection(box_px, distance_m: float, cls: str, track_id: int) -> Detection:
+    """A drawn Detection: what ``Detection(box, features, cls, probabilities, DRAWN_P_TARGET,
+    track_id)`` makes (its other fields their defaults), built as ``detector.detector`` builds its
+    own (the frozen dataclass's ``__init__`` cost several times this)."""
+    detection = _new_object(Detection)
+    _set_attribute(detection, "__dict__", {
+        "box_px": tuple(box_px), "features": np.array([0.0, 0.0, 0.0, distance_m, 0.0, 0.0]), "cls": cls,
+        "probabilities": _DRAWN_PROBABILITIES[cls].copy(), "p_target": DRAWN_P_TARGET, "track_id": track_id,
+        **_NO_TRACK_FIELDS})  # fmt: skip
+    return detection
+
+
+def _drawn_probabilities(cls: str) -> np.ndarray:
+    """The class probabilities a detection drawn as ``cls`` carries: ``DRAWN_P_TARGET`` on its class."""
+    probabilities = np.array([1.0 - DRAWN_P_TARGET if c == "noise" else 0.0 for c in DETECTOR_CLASSES])
+    probabilities[DETECTOR_CLASSES.index(cls)] += DRAWN_P_TARGET if cls != "noise" else 0.0
+    return probabilities
+
+
+_DRAWN_PROBABILITIES = {cls: _drawn_probabilities(cls) for cls in DETECTOR_CLASSES}
+_new_object = object.__new__
+_set_attribute = object.__setattr__
+#: a drawn detection's track fields: Detection's defaults
+_NO_TRACK_FIELDS = {f.name: f.default for f in dataclasses.fields(Detection) if f.default is not dataclasses.MISSING}
