@@ -139,29 +139,20 @@ def line_slope(x: np.ndarray, y: np.ndarray) -> float:
     """The slope of ``np.polyfit(x, y, 1)`` (x, y: 1-d float64), by its steps for a line without
     the wrappers' checks (~20k fits an hour at 22:00; they were two thirds of the cost): the same
     arrays through the same numpy operations (the Vandermonde matrix [x, 1], scaled by its
-    columns' norms; LAPACK's least squares as ``np.linalg.lstsq`` calls it, with polyfit's rcond,
-    under lstsq's error state), so the slope is polyfit's bit for bit (the tests compare them).
-    Polyfit's warning for a rank-deficient fit is left out: the times here span 0.3 s or more."""
+    columns' norms; ``np.linalg.lstsq`` with polyfit's rcond), so the slope is polyfit's bit for
+    bit (the tests compare them). Polyfit's warning for a rank-deficient fit is left out: the
+    times here span 0.3 s or more."""
     x, y = x + 0.0, y + 0.0
     lhs = np.empty((len(x), 2))  # np.vander(x, 2): x, then ones
     lhs[:, 0] = x
     lhs[:, 1] = 1.0
     scale = np.sqrt((lhs * lhs).sum(axis=0))
     lhs /= scale
-    if _lstsq is None:
-        c = np.linalg.lstsq(lhs, y, len(x) * _EPS)[0]
-    else:
-        with np.errstate(call=_lstsq_error, invalid="call", over="ignore", divide="ignore", under="ignore"):
-            c = _lstsq(lhs, y[:, None], len(x) * _EPS, signature="ddd->ddid")[0][:, 0]
+    c = np.linalg.lstsq(lhs, y, len(x) * _EPS)[0]
     return float(c[0] / scale[0])
 
 
 _EPS = float(np.finfo(np.float64).eps)
-# what np.linalg.lstsq calls, and raises from (None: not found in this numpy, lstsq itself is used)
-_lstsq = getattr(getattr(np.linalg, "_umath_linalg", None), "lstsq", None)
-_lstsq_error = getattr(getattr(np.linalg, "_linalg", None), "_raise_linalgerror_lstsq", None)
-if _lstsq_error is None:
-    _lstsq = None
 
 
 def blind_end_lamps(street: Street) -> list[int]:

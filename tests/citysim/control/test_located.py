@@ -137,7 +137,6 @@ def test_the_first_lamp_whose_approach_no_camera_sees_is_kept_lit_and_only_it():
 def test_the_line_slope_is_polyfits():
     from citysim.control import located
 
-    assert located._lstsq is not None  # this numpy's least squares is called directly
     rng = np.random.default_rng(5)
     for n in list(range(3, 40)) * 20:
         ts = np.cumsum(rng.uniform(0.05, 0.2, n))
