@@ -27,7 +27,11 @@ _NO_ROTATION = np.zeros(3)
 
 class CameraRays:
     """``pixel_to_ground`` of one pixel (remembered) and ``project`` of points, for ``camera``
-    (a ``detector.camera.CameraModel``), as those methods compute them."""
+    (a ``detector.camera.CameraModel``), as those methods compute them.
+
+    Conventions (``CameraModel``'s): pixels are OpenCV's (u right, v down, pixel centres on
+    integers, the distorted image); world points are metres, x along the street, y across it,
+    z up from the ground (z = 0); the camera frame is OpenCV's (x right, y down, z forward)."""
 
     def __init__(self, camera):
         self.camera = camera
