@@ -8,12 +8,10 @@ STAMP := $(VENV)/.installed
 
 install: $(STAMP)
 
-# --no-compile: Python compiles each module on its first import; byte-compiling every installed
-# file up front (scipy, matplotlib, dask, ...) took 6 of the install's 31 s
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet --no-compile -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
 # suburban_night: the whole night in fast mode (the shipped sensor model) for always_on, oracle, pir,
