@@ -20,7 +20,7 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(PY) -m experiments.demo
 
-# The same with every controller of the scenario over the whole night: about 7 minutes on 2 cores (see README).
+# The same with every controller of the scenario over the whole night: about 5.5 minutes on 2 cores (see README).
 demo-night: $(STAMP)
 	$(PY) -m experiments.demo --controllers all
 
