@@ -176,15 +176,17 @@ class Detector:
         self.target_threshold = float(target_threshold)
         self.division = division
         load_compiled_splits(division)
+        #: the band of the frame where a target within range can appear (``detector.roi``)
+        self.band: Crop = range_crop(
+            camera,
+            self.max_distance_m,
+            params.clahe_tile_px,
+            params.open_kernel_px,
+            params.dilate_iterations,
+            equalise_tiles_only,
+        )
         self.crop: Crop = (
-            range_crop(
-                camera,
-                self.max_distance_m,
-                params.clahe_tile_px,
-                params.open_kernel_px,
-                params.dilate_iterations,
-                equalise_tiles_only,
-            )
+            self.band
             if crop_to_range
             else full_frame(camera.height_px, camera.width_px, params.clahe_tile_px)
         )
@@ -201,6 +203,19 @@ class Detector:
         # what the controllers ask is_confirmed(track_id): the tracks, or the per-frame box tracker
         self.tracker = self.tracks if self.tracks is not None else (Tracker() if tracker is None else tracker)
         self.last_regions: Regions = Regions.empty(camera.height_px, camera.width_px)
+
+    @property
+    def motion_in_band(self) -> bool:
+        """Whether the last frame held a moving region reaching into the band where a target
+        within range can appear: what keeps a lamp camera at its full frame rate
+        (``citysim.sim.cameras``). On the crop every region does; on whole frames, motion beyond
+        range (above the band) does not, so both modes judge the same frames."""
+        regions = self.last_regions
+        if self.crop is self.band or not len(regions):
+            return bool(regions)
+        band = self.band
+        return any(y + h > band.top_px and x < band.right_px and x + w > band.left_px
+                   for x, y, w, h in regions.boxes_px.tolist())  # fmt: skip
 
     def reset_background(self) -> None:
         """Rebuild the background model (call when the lamp in view switches)."""

@@ -63,11 +63,11 @@ class DetectorPerFrame(Controller):
         self.clock = BackgroundClock(len(ctx.camera_lamps), 1.0 / ctx.frame_period_s)
 
     def motion_seen(self, camera_index):
-        return bool(self.detectors[camera_index].last_regions)
+        return self.detectors[camera_index].motion_in_band
 
     def cameras_in_motion(self) -> list[bool]:
         """``motion_seen`` of every camera at once (fast mode's sense loop asks every frame)."""
-        return [bool(det.last_regions) for det in self.detectors]
+        return [det.motion_in_band for det in self.detectors]
 
     def detect(self, camera_index, t_s, image) -> list | None:
         """The detector's detections, or None while the light in view is changing (not judged)."""

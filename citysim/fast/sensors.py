@@ -220,6 +220,11 @@ class SensedDetector:
         self.fa_report: tuple | None = None
         self.fa_track = 0
 
+    @property
+    def motion_in_band(self) -> bool:
+        """``Detector.motion_in_band``: a drawn frame's regions are all within range."""
+        return bool(self.last_regions)
+
     def reset_background(self) -> None:
         self.segmenter.reset()
 

@@ -286,3 +286,33 @@ def test_cameras_at_different_frame_rates_forget_at_the_same_speed():
     # a history counted in frames would have the 30 frames/s camera forget twice as fast
     in_frames = seconds_to_forget(30.0, SegmenterParams(mog2_history_s=500 / 30.0))
     assert in_frames < 0.6 * slow, (in_frames, slow)
+
+
+def test_motion_beyond_range_wakes_no_camera_on_whole_frames_either():
+    """A lamp camera is kept at its full frame rate by motion where a target within range can
+    appear (``Detector.motion_in_band``): on whole frames, a blob moving above the band makes
+    regions but no such motion; inside the band it does, as on the crop."""
+    camera = CameraModel(height_m=6.0, tilt_deg=20.0, focal_mm=3.6, sensor_w_mm=4.8, sensor_h_mm=3.6,
+                         width_px=320, height_px=240)  # fmt: skip
+    whole = Detector(camera, model=default_model(), crop_to_range=False)
+    band = Detector(camera, model=default_model())
+    top_px = band.crop.top_px
+    assert whole.band == band.crop and 30 < top_px < 200
+    rng = np.random.default_rng(0)
+    background = (40 + rng.normal(0, 3, (240, 320))).clip(0, 255).astype(np.uint8)
+    for _ in range(30):
+        whole.process(background)
+        band.process(background)
+    seen = {}
+    for where, (y0, y1) in {"above": (top_px - 28, top_px - 8), "inside": (200, 230)}.items():
+        for k in range(3):
+            frame = background.copy()
+            frame[y0:y1, 40 + 12 * k : 60 + 12 * k] = 200
+            whole.process(frame)
+            band.process(frame)
+        seen[where] = (len(whole.last_regions) > 0, whole.motion_in_band, band.motion_in_band)
+        for _ in range(30):  # the blob gone and forgotten
+            whole.process(background)
+            band.process(background)
+    assert seen["above"] == (True, False, False)
+    assert seen["inside"] == (True, True, True)
