@@ -54,14 +54,16 @@ _GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
 
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
                  max_width_px: int = 424, max_distance_m: float = 25.0, progress: bool = True,
-                 annotated: bool = True) -> dict:
+                 annotated: bool = True, full_frame: bool = False) -> dict:
     """Run the detector over a video and write ``out_dir``; returns the summary (also in summary.json).
 
     Frames wider than ``max_width_px`` are processed scaled down; every box written or drawn
     is in the video's own pixels (``summary["processing"]`` states the scale). ``annotated``
     False writes no annotated.mp4: what a lamp's own small computer would do, and a third
     less time on the development clips (encoding the video at its own size costs more than
-    detecting in it).
+    detecting in it). ``full_frame``: segment whole frames, not only the band where a target
+    within range can appear (``detector.roi``; for comparison, or a camera whose range covers
+    the whole frame anyway).
     """
     from detector.detector import Detector
 
@@ -75,12 +77,15 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
     cam = camera_for_video(camera, info, max_width_px, camera_source=str(camera_file))
     scale = frame_scale(info, max_width_px)
     model, model_name = _choose_model(cam, camera_file, model_path)
-    detector = Detector(cam, model=model, max_distance_m=max_distance_m)
+    detector = Detector(cam, model=model, max_distance_m=max_distance_m, crop_to_range=not full_frame)
     detector.tracks.keep_ended = True  # for tracks.csv
     summary = {"video": str(video), "camera": str(camera_file), "model": model_name,
                "boxes": "x, y, w, h in the video's own pixels (OpenCV boundingRect: columns x .. x+w-1)",
                "processing": scale.as_dict(), "max_distance_m": max_distance_m, "fps": info.fps,
-               "annotated_video": "annotated.mp4" if annotated else None}
+               "annotated_video": "annotated.mp4" if annotated else None, "full_frame": full_frame,
+               # what was segmented, in the processed frame's pixels (half-open): the band, or everything
+               "segmented_px": {"rows": [detector.crop.top_px, detector.crop.bottom_px],
+                                "columns": [detector.crop.left_px, detector.crop.right_px]}}
     with staged_output(out_dir) as stage:
         counts = _detect_frames(detector, info, scale, stage, progress, annotated)
         counts["tracks"] = write_tracks_csv(detector.tracks, stage / "tracks.csv")
@@ -250,6 +255,8 @@ def _detect_parser() -> argparse.ArgumentParser:
                    help="ignore objects farther than this, m")
     p.add_argument("--no-video", action="store_true",
                    help="write no annotated.mp4 (only the CSVs and summary.json, as a lamp's own computer would)")
+    p.add_argument("--full-frame", action="store_true",
+                   help="segment whole frames, not only the band where a target within --max-distance-m can appear")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p
 
@@ -275,7 +282,8 @@ def main(argv: list[str] | None = None) -> int:
             args = _detect_parser().parse_args(argv)
             check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
             summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
-                                   args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video)
+                                   args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video,
+                                   full_frame=args.full_frame)
         except USER_ERRORS as exc:
             print(f"error: {exc}", file=sys.stderr)
             return USAGE_EXIT

@@ -108,6 +108,20 @@ def test_no_video_writes_the_same_results_without_the_annotated_video(scene_b_fi
         assert (without / name).read_text() == (with_video / name).read_text()
     assert json.loads((without / "summary.json").read_text())["annotated_video"] is None
 
+def test_full_frame_segments_everything_and_says_so(scene_b_files):
+    """Scene B's band is the whole frame already (its range covers every row): --full-frame gives
+    the same detections and tracks, and summary.json says what was segmented."""
+    band, whole = scene_b_files / "band", scene_b_files / "whole"
+    common = ["--camera", str(scene_b_files / "cam.yaml"), "--no-progress", "--no-video"]
+    assert main([str(scene_b_files / "walker.mp4"), *common, "--out", str(band)]) == 0
+    assert main([str(scene_b_files / "walker.mp4"), *common, "--out", str(whole), "--full-frame"]) == 0
+    for name in ("detections.csv", "tracks.csv"):
+        assert (whole / name).read_text() == (band / name).read_text()
+    summaries = [json.loads((d / "summary.json").read_text()) for d in (band, whole)]
+    assert [s["full_frame"] for s in summaries] == [False, True]
+    assert summaries[1]["segmented_px"] == {"rows": [0, SCENE_B["height_px"]], "columns": [0, SCENE_B["width_px"]]}
+
+
 def run_cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "detector", *args], capture_output=True, text=True)
 
