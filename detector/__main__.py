@@ -53,7 +53,7 @@ _GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
 
 
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
-                 max_width_px: int = 424, max_distance_m: float = 25.0, progress: bool = True,
+                 max_width_px: int = 424, max_distance_m: float = 25.0, *, progress: bool = True,
                  annotated: bool = True, full_frame: bool = False) -> dict:
     """Run the detector over a video and write ``out_dir``; returns the summary (also in summary.json).
 
