@@ -97,14 +97,15 @@ class Detection:
 # the same objects (tests/detector/test_detector.py checks them against the constructor's)
 _new_object = object.__new__
 _set_attribute = object.__setattr__
-# a per-frame detection's track fields: Detection's defaults
-_NO_TRACK_FIELDS = {
+#: a per-frame detection's track fields: Detection's defaults
+NO_TRACK_FIELDS = {
     f.name: f.default for f in dataclasses.fields(Detection) if f.default is not dataclasses.MISSING
 }
 
 
-def _detection(fields: dict) -> Detection:
-    """A Detection of all its ``fields`` (name -> value), as ``Detection(**fields)`` makes it."""
+def detection_from_fields(fields: dict) -> Detection:
+    """A Detection of all its ``fields`` (name -> value), as ``Detection(**fields)`` makes it
+    (the detector's own, and fast mode's drawn ones, ``citysim.fast.drawn``)."""
     detection = _new_object(Detection)
     _set_attribute(detection, "__dict__", fields)
     return detection
@@ -328,7 +329,7 @@ class Detector:
         if self.tracks is not None:
             views = self.tracks.update(prepared, proba_lists)
             return [
-                _detection({
+                detection_from_fields({
                     "box_px": tuple(box), "features": feat_rows[j], "cls": names[labels[j]], "probabilities": probability_rows[j],
                     "p_target": p_target[j], "track_id": v.track_id, "track_cls": v.cls,
                     "track_p_target": v.p_target, "track_target": v.target, "track_reason": v.reason,
@@ -340,9 +341,9 @@ class Detector:
         threshold = self.target_threshold
         ids = self.tracker.update_rows(boxes, [p >= threshold for p in p_target])
         return [
-            _detection({
+            detection_from_fields({
                 "box_px": tuple(box), "features": feat_rows[j], "cls": names[labels[j]], "probabilities": probability_rows[j],
-                "p_target": p_target[j], "track_id": ids[j], **_NO_TRACK_FIELDS,
+                "p_target": p_target[j], "track_id": ids[j], **NO_TRACK_FIELDS,
             })  # fmt: skip
             for j, box in enumerate(boxes)
         ]

@@ -158,3 +158,7 @@ class Controller:
         True while its last judged frame held a moving region.
         """
         return False
+
+    def cameras_in_motion(self) -> list[bool]:
+        """``motion_seen`` of every camera at once (fast mode's sense loop asks every frame)."""
+        return [self.motion_seen(i) for i in range(len(self.ctx.camera_lamps))]

@@ -6,12 +6,10 @@ keeps the k-of-n state the real detector's light box tracker would.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from citysim.config.kinds import DETECTOR_CLASSES
-from detector.detector import Detection
+from detector.detector import NO_TRACK_FIELDS, Detection, detection_from_fields
 
 #: The p_target a drawn target detection carries (above any usual threshold), and a missed one's.
 DRAWN_P_TARGET = 0.9
@@ -45,12 +43,10 @@ def drawn_detection(box_px, distance_m: float, cls: str, track_id: int) -> Detec
     """A drawn Detection: what ``Detection(box, features, cls, probabilities, DRAWN_P_TARGET,
     track_id)`` makes (its other fields their defaults), built as ``detector.detector`` builds its
     own (the frozen dataclass's ``__init__`` cost several times this)."""
-    detection = _new_object(Detection)
-    _set_attribute(detection, "__dict__", {
+    return detection_from_fields({
         "box_px": tuple(box_px), "features": np.array([0.0, 0.0, 0.0, distance_m, 0.0, 0.0]), "cls": cls,
         "probabilities": _DRAWN_PROBABILITIES[cls].copy(), "p_target": DRAWN_P_TARGET, "track_id": track_id,
-        **_NO_TRACK_FIELDS})  # fmt: skip
-    return detection
+        **NO_TRACK_FIELDS})  # fmt: skip
 
 
 def _drawn_probabilities(cls: str) -> np.ndarray:
@@ -61,7 +57,3 @@ def _drawn_probabilities(cls: str) -> np.ndarray:
 
 
 _DRAWN_PROBABILITIES = {cls: _drawn_probabilities(cls) for cls in DETECTOR_CLASSES}
-_new_object = object.__new__
-_set_attribute = object.__setattr__
-#: a drawn detection's track fields: Detection's defaults
-_NO_TRACK_FIELDS = {f.name: f.default for f in dataclasses.fields(Detection) if f.default is not dataclasses.MISSING}

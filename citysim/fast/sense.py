@@ -26,7 +26,7 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
     n = len(lamps)
     watch = [list(range(max(0, i - 1), min(n, i + 2))) for i in range(n)]
     # bound once: the loop below runs per camera per frame (~300k times an hour)
-    on_frame, in_motion = controller.on_frame, _motion_of(controller, n)
+    on_frame, in_motion = controller.on_frame, controller.cameras_in_motion
     collect = [collector.on_frame for collector in collectors]
     k = 0
     while True:
@@ -47,10 +47,9 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
         # what decides whether a camera is judged was read above, before any camera is judged
         if every:
             judged = range(n)
-        elif any_ramping:
-            judged = [i for i in range(n) if awake[i] or moving[i] or any(ramping[j] for j in watch[i])]
         else:
-            judged = [i for i, (woken, seen) in enumerate(zip(awake, moving, strict=True)) if woken or seen]
+            judged = [i for i in range(n)
+                      if awake[i] or moving[i] or (any_ramping and any(ramping[j] for j in watch[i]))]  # fmt: skip
         for i in judged:
             frame = SensedFrame(sensors, i)
             detections = on_frame(i, t, frame)
@@ -59,13 +58,6 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
                 for collector_on_frame in collect:
                     collector_on_frame(i, t, truth, detections)
         k += 1
-
-
-def _motion_of(controller, n: int):
-    """A function giving ``controller.motion_seen`` of every camera: its ``cameras_in_motion`` when
-    it has one (one call a frame, not one per camera)."""
-    batch = getattr(controller, "cameras_in_motion", None)
-    return batch if batch is not None else lambda: [controller.motion_seen(i) for i in range(n)]
 
 
 def fast_sensors(night, model) -> FastSensors:

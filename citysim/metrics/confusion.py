@@ -181,14 +181,11 @@ class DetectionConfusion:
             if self._passes.get(lamp_index):
                 self._end_passes(lamp_index, t_s)
             return
-        if not detections:  # a frame with road users in view and no detection: only misses to count
-            self._add_unseen(truth, lamp_index, t_s)
-            return
         self._add_matched(truth, detections, lamp_index, t_s)
 
     def _add_matched(self, truth: Sequence[TruthLike], detections: Sequence[DetectionLike], lamp_index: int,
                      t_s: float) -> None:  # fmt: skip
-        """``add`` of a frame with detections: matched to the truth boxes, each counted."""
+        """``add`` of a frame with road users or detections: matched to the truth boxes, each counted."""
         truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [self._index(d.cls, "detections.cls") for d in detections]
         det_target = [d.p_target >= self.target_threshold for d in detections]
@@ -222,27 +219,6 @@ class DetectionConfusion:
             p.last_seen_s = t_s
             p.fully_seen |= bool(t.fully_visible)
             p.detected |= c is not None and det_target[c]
-        self._end_passes(lamp_index, t_s)
-
-    def _add_unseen(self, truth: Sequence[TruthLike], lamp_index: int, t_s: float) -> None:
-        """``add`` of a frame without detections: each fully visible road user a miss, passes kept."""
-        self.frames += 1
-        passes = self._passes.setdefault(lamp_index, {})
-        for t in truth:
-            truth_cls = scored_as(t.cls)
-            if truth_cls == "noise":
-                continue
-            if t.fully_visible:
-                self._count(truth_cls, 0, False)
-            p = passes.get(t.object_id)
-            if p is not None and t_s - p.last_seen_s > self.pass_gap_s:
-                self._end_pass(p)  # back in view after a gap: that was one pass, this is another
-                p = None
-            if p is None:
-                p = passes[t.object_id] = _Pass(truth_cls, t_s)
-                self._seen_since(lamp_index, t_s)
-            p.last_seen_s = t_s
-            p.fully_seen |= bool(t.fully_visible)
         self._end_passes(lamp_index, t_s)
 
     def _end_passes(self, lamp_index: int, t_s: float) -> None:

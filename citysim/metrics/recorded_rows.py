@@ -28,9 +28,8 @@ def zone_of(starts_m: np.ndarray, ends_m: np.ndarray, x_m: np.ndarray) -> np.nda
     """Per point, the index of the zone [start, end) holding it, -1 for none; the zones are in
     start order, each ending at or before the next starts (so only the last one starting at or
     before a point can hold it: ``bisect_right(starts, x) - 1``, the per-agent paths' look-up)."""
-    j = np.searchsorted(starts_m, x_m, side="right") - 1
-    inside = (j >= 0) & (x_m < ends_m[np.maximum(j, 0)])
-    return np.where(inside, j, -1)
+    place = place_of(starts_m, ends_m, x_m)
+    return np.where(place >= 0, place, -1)
 
 
 def place_of(starts_m: np.ndarray, ends_m: np.ndarray, x_m: np.ndarray) -> np.ndarray:

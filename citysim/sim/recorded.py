@@ -72,17 +72,15 @@ class RecordedChunk:
         """Every row as ``AgentColumns`` (fast mode's candidates read them)."""
         x_m, y_m, heading_rad, speed_mps = (np.ascontiguousarray(self.column(name))
                                             for name in ("x_m", "y_m", "heading_rad", "speed_mps"))  # fmt: skip
-        looks = [self.object_looks[i] for i in self.object_index.tolist()]
-        return AgentColumns(x_m, y_m, heading_rad, speed_mps, tuple(lk.cls for lk in looks),
-                            np.array([lk.light_on for lk in looks], dtype=bool))  # fmt: skip
+        light_on = np.array([lk.light_on for lk in self.object_looks], dtype=bool)[self.object_index]
+        return AgentColumns(x_m, y_m, heading_rad, speed_mps, tuple(self.cls_list), light_on)
 
     def agents(self, step: int) -> list[AgentState]:
         """The snapshots of step ``step``'s agents, in recorded order."""
         first, end = self.first_list[step], self.first_list[step + 1]
         out = []
-        member = self.member_first[first]
-        phases = self.member_phases[member : self.member_first[end]].tolist()
-        member = 0
+        phases = self.member_phases[self.member_first[first] : self.member_first[end]].tolist()
+        member = 0  # this step's members' phases used so far
         for oid, index, (x, y, heading, speed, phase) in zip(
             self.object_id[first:end].tolist(), self.object_index[first:end].tolist(),
             self.rows[first:end].tolist(), strict=True,

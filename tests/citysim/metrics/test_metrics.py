@@ -378,8 +378,8 @@ def test_matching_on_plain_floats_pairs_as_the_iou_matrix_does(seed):
 
 
 class _EveryFrameMatched(DetectionConfusion):
-    """The slow path: every frame matched (no shortcut for frames without detections) and every
-    frame's passes scanned for ended ones."""
+    """The slow path: every frame matched (no shortcut for empty frames) and every frame's passes
+    scanned for ended ones."""
 
     def add(self, truth, detections, lamp_index, t_s):
         self._add_matched(truth, detections, lamp_index, t_s)
