@@ -3,6 +3,9 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+# the test tools (pytest, xdist, hypothesis, ruff) only for the targets that use them: make demo
+# installs what the simulator needs and no more (about 6 s of a fresh clone's demo)
+TEST_STAMP := $(VENV)/.installed-test
 
 .PHONY: install demo demo-night test bench bench-night lint clean
 
@@ -11,8 +14,12 @@ install: $(STAMP)
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e .
 	touch $(STAMP)
+
+$(TEST_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(TEST_STAMP)
 
 # suburban_night: the whole night in fast mode (the shipped sensor model) for always_on, oracle, pir,
 # schedule and detector_located, its first minute again at full fidelity as the check, and the year's figures.
@@ -25,7 +32,7 @@ demo-night: $(STAMP)
 	$(PY) -m experiments.demo --controllers all
 
 # one worker per core; a test file stays on one worker, so its module fixtures run once
-test: $(STAMP)
+test: $(TEST_STAMP)
 	$(PY) -m pytest -n auto --dist loadfile
 
 # Figures, not pass/fail: detector vs OpenCV's floor, renderer, simulation speed, sweep scaling.
@@ -36,7 +43,7 @@ bench: $(STAMP)
 bench-night: $(STAMP)
 	$(PY) -m experiments.bench --night
 
-lint: $(STAMP)
+lint: $(TEST_STAMP)
 	$(VENV)/bin/ruff check detector citysim experiments tests
 
 clean:

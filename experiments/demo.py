@@ -1,6 +1,7 @@
 """`make demo`: suburban_night in fast mode, a full-fidelity check of its start, and its year.
 
-Three ``citysim`` commands, each printing its own table:
+Three ``citysim`` commands, each printing its own table (2 and 3 start with 1 and run behind it at
+the lowest CPU priority, on the time its two workers leave idle: ``experiments.idle_cores``):
 
 1. ``citysim run --fidelity fast``: ``--controllers`` (``make demo``: ``NIGHT_CONTROLLERS``, the
    bound, the conventional schemes and the camera controller a planner would install; ``make
@@ -13,7 +14,8 @@ Three ``citysim`` commands, each printing its own table:
 3. ``citysim year``: the year at the scenario's site for ``YEAR_CONTROLLERS`` from a response
    table of ``--year-sample-s`` samples; writes DIR/year/report.html.
 
-Each step's wall and CPU seconds are printed after it; the report paths come last. Bad values
+Each step's wall and CPU seconds are printed after it, 2's and 3's output once the night is done;
+the report paths come last. Bad values
 stop before any work with one line naming the option and exit code 2.
 """
 
@@ -27,6 +29,7 @@ from pathlib import Path
 from citysim.cli import main as citysim
 from citysim.sim.loop import RunError, check_controllers
 from experiments.bench.night import WHOLE_NIGHT_S, cpu_s
+from experiments.idle_cores import BehindChain
 
 REPO = Path(__file__).resolve().parents[1]
 SCENARIO = REPO / "scenarios" / "suburban_night.yaml"
@@ -75,15 +78,35 @@ def check_args(p: argparse.ArgumentParser, args) -> None:
             p.error(f"--{bad}")
 
 
-def _step(title: str, argv: list[str], timings: list) -> None:
+def _step(title: str, argv: list[str], timings: list, behind: BehindChain) -> None:
     print(f"\n=== {title} ===", flush=True)
-    c0, t0 = cpu_s(), time.perf_counter()
+
+    def own_cpu_s() -> float:  # this process's and its workers', not those of the commands behind it
+        return cpu_s() - behind.reaped_cpu_s
+
+    c0, t0 = own_cpu_s(), time.perf_counter()
     code = citysim(argv)
-    wall, cpu = time.perf_counter() - t0, cpu_s() - c0
+    wall, cpu = time.perf_counter() - t0, own_cpu_s() - c0
     timings.append((title, wall, cpu))
     print(f"({title}: {wall:.0f} s wall, {cpu:.0f} CPU-s)", flush=True)
     if code:
         raise SystemExit(code)
+
+
+def start_behind(steps: list[tuple[str, list[str]]]) -> BehindChain:
+    """The ``citysim`` commands of ``steps`` started now, one after another, on the CPU time the
+    night leaves idle (``experiments.idle_cores``)."""
+    return BehindChain([(title, [sys.executable, "-m", "citysim", *argv, "--no-progress"]) for title, argv in steps])
+
+
+def _print_behind(behind: BehindChain, timings: list) -> None:
+    for done in behind.finished():
+        print(f"\n=== {done.title} (ran behind the night, on the CPU time it left idle) ===")
+        print(done.output.rstrip(), flush=True)
+        timings.append((done.title, done.wall_s, done.cpu_s))
+        print(f"({done.title}: {done.wall_s:.0f} s wall from its start, {done.cpu_s:.0f} CPU-s)", flush=True)
+        if done.exit_code:
+            raise SystemExit(done.exit_code)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -95,20 +118,27 @@ def main(argv: list[str] | None = None) -> int:
     timings: list = []
     which = ["--controllers", args.controllers] if args.controllers != "all" else []
     who = "every controller" if args.controllers == "all" else args.controllers
-    _step(f"1. the night in fast mode: {who}, {args.night_s:g} s from 22:00 ({night_h:.2g} h)",
-          ["run", scenario, "--out", str(out / "night"), "--fidelity", "fast", "--duration", f"{args.night_s:g}",
-           *which], timings)  # fmt: skip
-    _step(f"2. the check: its first {args.check_s:g} s at full fidelity (rendered and detected) beside fast mode",
-          ["validate", scenario, "--seeds", "1", "--duration", f"{args.check_s:g}", "--controllers",
-           CHECK_CONTROLLERS], timings)  # fmt: skip
-    _step(f"3. the year: {YEAR_CONTROLLERS}, {args.year_sample_s:g} s samples per traffic level",
-          ["year", scenario, "--out", str(out / "year"), "--controllers", YEAR_CONTROLLERS,
-           "--sample-s", f"{args.year_sample_s:g}"], timings)  # fmt: skip
+    t0 = time.perf_counter()
+    # the check and the year need nothing of the night: they start now, behind it (see idle_cores)
+    behind = start_behind([
+        (f"2. the check: its first {args.check_s:g} s at full fidelity (rendered and detected) beside fast mode",
+         ["validate", scenario, "--seeds", "1", "--duration", f"{args.check_s:g}", "--controllers", CHECK_CONTROLLERS]),
+        (f"3. the year: {YEAR_CONTROLLERS}, {args.year_sample_s:g} s samples per traffic level",
+         ["year", scenario, "--out", str(out / "year"), "--controllers", YEAR_CONTROLLERS,
+          "--sample-s", f"{args.year_sample_s:g}"]),
+    ])  # fmt: skip
+    try:
+        _step(f"1. the night in fast mode: {who}, {args.night_s:g} s from 22:00 ({night_h:.2g} h)",
+              ["run", scenario, "--out", str(out / "night"), "--fidelity", "fast", "--duration", f"{args.night_s:g}",
+               *which], timings, behind)  # fmt: skip
+        _print_behind(behind, timings)
+    finally:
+        behind.stop()  # a failed or interrupted night leaves nothing running behind it
     print("\n=== demo done ===")
     for title, wall, cpu in timings:
         print(f"  {wall:5.0f} s wall {cpu:6.0f} CPU-s  {title.split(':')[0]}")
-    total_wall, total_cpu = sum(t[1] for t in timings), sum(t[2] for t in timings)
-    print(f"  {total_wall:5.0f} s wall {total_cpu:6.0f} CPU-s  in all")
+    total_wall, total_cpu = time.perf_counter() - t0, sum(t[2] for t in timings)
+    print(f"  {total_wall:5.0f} s wall {total_cpu:6.0f} CPU-s  in all (2 and 3 ran behind 1)")
     print(f"open in a browser:\n  the night  {out / 'night' / 'report.html'}\n  the year   {out / 'year' / 'report.html'}")
     return 0
 

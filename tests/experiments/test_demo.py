@@ -3,6 +3,21 @@
 import pytest
 
 from experiments import demo
+from experiments.idle_cores import Finished
+
+
+class _RecordedBehind:
+    """Stands in for the chain of commands behind the night: records them, runs none."""
+
+    def __init__(self, steps, calls):
+        self.steps, self.reaped_cpu_s = steps, 0.0
+        calls.extend(argv for _, argv in steps)
+
+    def finished(self):
+        return iter([Finished(title, 0, "(output)", 1.0, 1.0) for title, _ in self.steps])
+
+    def stop(self):
+        pass
 
 
 @pytest.mark.parametrize(("argv", "option"), [
@@ -12,6 +27,7 @@ from experiments import demo
 ])  # fmt: skip
 def test_bad_demo_options_exit_2_before_any_simulation(argv, option, capsys, monkeypatch):
     monkeypatch.setattr(demo, "citysim", lambda *a: pytest.fail("simulated although an option was bad"))
+    monkeypatch.setattr(demo, "start_behind", lambda *a: pytest.fail("started the check although an option was bad"))
     with pytest.raises(SystemExit) as stop:
         demo.main(argv)
     assert stop.value.code == 2
@@ -19,11 +35,14 @@ def test_bad_demo_options_exit_2_before_any_simulation(argv, option, capsys, mon
     assert option in err and ("must be in" in err or "did you mean detector" in err)
 
 
-def test_the_demo_runs_the_three_commands_in_order_and_says_where_the_reports_are(tmp_path, capsys, monkeypatch):
+def test_the_demo_runs_the_three_commands_and_says_where_the_reports_are(tmp_path, capsys, monkeypatch):
     calls = []
     monkeypatch.setattr(demo, "citysim", lambda argv: calls.append(argv) or 0)
+    monkeypatch.setattr(demo, "start_behind", lambda steps: _RecordedBehind(steps, calls))
     assert demo.main(["--out", str(tmp_path)]) == 0
-    assert [c[0] for c in calls] == ["run", "validate", "year"]
+    # the check and the year are started first, behind the night (the night is the foreground)
+    assert [c[0] for c in calls] == ["validate", "year", "run"]
+    calls = [calls[2], calls[0], calls[1]]
     assert calls[0][calls[0].index("--fidelity") + 1] == "fast"
     assert calls[0][calls[0].index("--duration") + 1] == "28800"  # the whole night by default
     # the night's controllers are the year's: its table and the year's answer the same question
@@ -40,6 +59,18 @@ def test_the_demo_runs_the_three_commands_in_order_and_says_where_the_reports_ar
 def test_all_controllers_runs_the_scenarios_own_list(tmp_path, monkeypatch):
     calls = []
     monkeypatch.setattr(demo, "citysim", lambda argv: calls.append(argv) or 0)
+    monkeypatch.setattr(demo, "start_behind", lambda steps: _RecordedBehind(steps, []))
     assert demo.main(["--out", str(tmp_path), "--controllers", "all", "--night-s", "600"]) == 0
     assert "--controllers" not in calls[0]  # citysim run's default: every controller of the scenario
     assert calls[0][calls[0].index("--duration") + 1] == "600"
+
+
+def test_a_failed_night_stops_the_commands_behind_it(tmp_path, monkeypatch):
+    stopped = []
+    behind = _RecordedBehind([("2. the check", ["validate"])], [])
+    behind.stop = lambda: stopped.append(True)
+    monkeypatch.setattr(demo, "citysim", lambda argv: 3)
+    monkeypatch.setattr(demo, "start_behind", lambda steps: behind)
+    with pytest.raises(SystemExit) as stop:
+        demo.main(["--out", str(tmp_path)])
+    assert stop.value.code == 3 and stopped == [True]
