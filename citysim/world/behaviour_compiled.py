@@ -296,14 +296,18 @@ def plan(state, vu, trig, v_dot, q4, dt, t_s, out):  # pragma: no cover - compil
     lat, ext_l, ahead, beside = nb[0], nb[1], nb[4], nb[5]
     # ---- lateral choice (only agents with someone ahead or beside; the rest head for pref)
     rows = np.zeros(n, np.bool_)
-    uniform_steps = True
+    n_point_bands = 0
     for i in range(n):
         lo, hi = state[i, BAND_LO] - half[i], state[i, BAND_HI] + half[i]
         for j in range(n):
             reachable = lat[i, j] + ext_l[i, j] > lo and lat[i, j] - ext_l[i, j] < hi
             rows[i] |= ahead[i, j] and reachable or beside[i, j]
         if rows[i] and (state[i, BAND_HI] - state[i, BAND_LO]) / (N_LATERAL_CANDIDATES - 1) == 0:
-            uniform_steps = False  # numpy's linspace then divides before it multiplies, for all
+            n_point_bands += 1
+    # some band empty: numpy's linspace then divides before it multiplies, for all. A comparison,
+    # not a flag set to True or False: numba would type a constant flag as a literal and compile
+    # choose_offset (and candidates) twice, once for the literal True and once for bool
+    uniform_steps = n_point_bands == 0
     for i in range(n):
         out[NEW_TARGET, i] = choose_offset(i, state, vu, trig, nb, own, uniform_steps) if rows[i] else state[i, PREF]
     # ---- giving way at the kerb
