@@ -9,7 +9,7 @@ with its bounds broadcast along the last axis (numpy's vector loop) ``x``; ``np.
 ``k * step + start`` with the end set to ``stop``. No transcendental function is called here:
 the cosines and sines of the heading differences, the matrix of velocities along the legs (a
 BLAS product: fused multiply-adds) and ``(v / v0) ** 4`` (libm ``pow``) come in computed by
-numpy. Compiled once and cached on disk (``cache=True``); no parallelism, no fast-math.
+numpy. Compiled as ``citysim.world.jit`` says: cached on disk, no parallelism, no fast-math.
 
 Conventions: world frame, metres, seconds, m/s; angles rad CCW from +x; offsets metres to the
 left of the leg direction. Arrays: ``state`` (N, ``rows.N_COLUMNS``) and ``vu`` (2, N, 2) of
@@ -20,9 +20,9 @@ left of the leg direction. Arrays: ``state`` (N, ``rows.N_COLUMNS``) and ``vu`` 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from citysim.world.conflicts_compiled import must_wait
+from citysim.world.jit import inlined, kernel, leaf
 from citysim.world.rows import (
     ACC,
     B_COMF,
@@ -70,32 +70,32 @@ DS, STEP_LAT, NEW_TARGET, WAIT, TILT_RUN, WANT_V = range(6)
 N_PLAN = 6
 
 
-@njit(cache=True)
+@leaf
 def np_max(a, b):  # pragma: no cover - compiled
     """``np.maximum(a, b)`` of two floats that are not NaN."""
     return a if a > b else b
 
 
-@njit(cache=True)
+@leaf
 def np_min(a, b):  # pragma: no cover - compiled
     """``np.minimum(a, b)`` of two floats that are not NaN."""
     return a if a < b else b
 
 
-@njit(cache=True)
+@leaf
 def clip(x, lo, hi):  # pragma: no cover - compiled
     """``np.clip`` of arrays elementwise (lo <= hi, not NaN): min(max(x, lo), hi), the bound on a tie."""
     m = x if x > lo else lo
     return m if m < hi else hi
 
 
-@njit(cache=True)
+@leaf
 def clip_keep(x, lo, hi):  # pragma: no cover - compiled
     """``np.clip`` with bounds broadcast along the last axis (numpy's SIMD loop): x on a tie."""
     return lo if x < lo else (hi if x > hi else x)
 
 
-@njit(cache=True)
+@inlined
 def leg_frame(state, vu, t_s):  # pragma: no cover - compiled
     """Per agent: (distance along its leg, offset, patience, desired speed now)."""
     n = state.shape[0]
@@ -110,7 +110,7 @@ def leg_frame(state, vu, t_s):  # pragma: no cover - compiled
     return s_along, off, patience, v0
 
 
-@njit(cache=True)
+@inlined
 def surroundings(state, vu, trig, v_dot, off, patience):  # pragma: no cover - compiled
     """Every pair seen from each one's leg frame, [i, j]: j as i sees it.
 
@@ -130,20 +130,21 @@ def surroundings(state, vu, trig, v_dot, off, patience):  # pragma: no cover - c
             ext_l[i, j] = half_len * s + half_wid * c
             v_along[i, j] = v_dot[j, i]
     gap = np.empty((n, n))
-    ahead, beside = np.zeros((n, n), np.bool_), np.zeros((n, n), np.bool_)
+    # every boolean array of the step is np.empty and then written whole: np.zeros would compile
+    # numba's zeros and zero-fill kernels too, on a fresh clone's critical path
+    ahead, beside = np.empty((n, n), np.bool_), np.empty((n, n), np.bool_)
     self_l, half = np.empty(n), np.empty(n)
     for i in range(n):
         self_f, self_l[i] = ext_f[i, i], ext_l[i, i]
         half[i] = self_l[i] + state[i, MARGIN] * patience[i]  # the held-up squeeze past with less clearance
         for j in range(n):
             gap[i, j] = fwd[i, j] - ext_f[i, j] - self_f
-            if j != i:
-                ahead[i, j] = fwd[i, j] > 0 and gap[i, j] < state[i, LOOK]
-                beside[i, j] = abs(fwd[i, j]) < ext_f[i, j] + self_f + 0.3
+            ahead[i, j] = j != i and fwd[i, j] > 0 and gap[i, j] < state[i, LOOK]
+            beside[i, j] = j != i and abs(fwd[i, j]) < ext_f[i, j] + self_f + 0.3
     return (lat, ext_l, gap, v_along, ahead, beside), (self_l, half)
 
 
-@njit(cache=True)
+@leaf
 def candidates(lo, hi, off, target_prev, pref, uniform_steps):  # pragma: no cover - compiled
     """The lateral candidates: where it is, where it aimed, where it prefers, and
     ``N_LATERAL_CANDIDATES`` evenly over the band [lo, hi] (``np.linspace``; ``uniform_steps``
@@ -161,7 +162,7 @@ def candidates(lo, hi, off, target_prev, pref, uniform_steps):  # pragma: no cov
     return cands
 
 
-@njit(cache=True)
+@leaf
 def facing_edge(i, state, vu, trig, nb, in_lane0, reach_max):  # pragma: no cover - compiled
     """Facing someone oncoming in its way: the band edge agent i steps to, else NaN.
 
@@ -183,7 +184,7 @@ def facing_edge(i, state, vu, trig, nb, in_lane0, reach_max):  # pragma: no cove
     return state[i, BAND_LO] if on_left else state[i, BAND_HI]
 
 
-@njit(cache=True)
+@inlined
 def choose_offset(i, state, vu, trig, nb, own, uniform_steps):  # pragma: no cover - compiled
     """Agent i's best lateral offset: the candidate with the most free distance within its
     horizon (minus reluctance), among those reachable without sweeping into anyone beside.
@@ -196,11 +197,12 @@ def choose_offset(i, state, vu, trig, nb, own, uniform_steps):  # pragma: no cov
     target_prev, pref = state[i, TARGET], state[i, PREF]
     cands = candidates(state[i, BAND_LO], state[i, BAND_HI], off, target_prev, pref, uniform_steps)
     reach_max = v0[i] * horizon
-    in_lane0 = np.zeros(n, np.bool_)
+    in_lane0 = np.empty(n, np.bool_)  # written whole for the first candidate
     score = np.empty(cands.size)
-    infeasible = np.zeros(cands.size, np.bool_)
+    infeasible = np.empty(cands.size, np.bool_)
     for c in range(cands.size):
         cand = cands[c]
+        infeasible[c] = False
         blocked_min = np.inf
         sweep_lo, sweep_hi = np_min(off, cand) - half, np_max(off, cand) + half
         for j in range(n):
@@ -230,7 +232,7 @@ def choose_offset(i, state, vu, trig, nb, own, uniform_steps):  # pragma: no cov
     return cands[best]
 
 
-@njit(cache=True)
+@inlined
 def lateral_step(i, state, nb, own, target, dt):  # pragma: no cover - compiled
     """Agent i's sideways step toward ``target`` this step, stopping short of anyone beside, m."""
     lat, ext_l, beside = nb[0], nb[1], nb[5]
@@ -248,7 +250,7 @@ def lateral_step(i, state, nb, own, target, dt):  # pragma: no cover - compiled
     return clip(step, -np_max(room_right, 0.0), np_max(room_left, 0.0))
 
 
-@njit(cache=True)
+@inlined
 def forward_step(i, state, nb, own, step_lat, dt, free_term):  # pragma: no cover - compiled
     """Agent i's step along its leg: the Intelligent Driver Model behind the leader in the
     corridor its sideways step sweeps, never more than the room left to that leader, m."""
@@ -282,7 +284,7 @@ def forward_step(i, state, nb, own, step_lat, dt, free_term):  # pragma: no cove
     return np_min(ds, np_max(room, 0.0))
 
 
-@njit(cache=True)
+@kernel
 def plan(state, vu, trig, v_dot, q4, dt, t_s, out):  # pragma: no cover - compiled
     """Every agent's move for the next ``dt`` seconds into ``out`` (rows ``DS`` .. ``WANT_V``).
 
@@ -295,15 +297,20 @@ def plan(state, vu, trig, v_dot, q4, dt, t_s, out):  # pragma: no cover - compil
     own = (off, patience, v0, half, self_l)
     lat, ext_l, ahead, beside = nb[0], nb[1], nb[4], nb[5]
     # ---- lateral choice (only agents with someone ahead or beside; the rest head for pref)
-    rows = np.zeros(n, np.bool_)
-    uniform_steps = True
+    rows = np.empty(n, np.bool_)
+    n_point_bands = 0
     for i in range(n):
         lo, hi = state[i, BAND_LO] - half[i], state[i, BAND_HI] + half[i]
+        rows[i] = False
         for j in range(n):
             reachable = lat[i, j] + ext_l[i, j] > lo and lat[i, j] - ext_l[i, j] < hi
             rows[i] |= ahead[i, j] and reachable or beside[i, j]
         if rows[i] and (state[i, BAND_HI] - state[i, BAND_LO]) / (N_LATERAL_CANDIDATES - 1) == 0:
-            uniform_steps = False  # numpy's linspace then divides before it multiplies, for all
+            n_point_bands += 1
+    # some band empty: numpy's linspace then divides before it multiplies, for all. A comparison,
+    # not a flag set to True or False: numba would type a constant flag as a literal and compile
+    # choose_offset (and candidates) twice, once for the literal True and once for bool
+    uniform_steps = n_point_bands == 0
     for i in range(n):
         out[NEW_TARGET, i] = choose_offset(i, state, vu, trig, nb, own, uniform_steps) if rows[i] else state[i, PREF]
     # ---- giving way at the kerb

@@ -11,8 +11,7 @@ Conventions: world frame, metres, seconds, m/s; ``state`` and ``vu`` as in ``cit
 
 from __future__ import annotations
 
-from numba import njit
-
+from citysim.world.jit import inlined, leaf
 from citysim.world.rows import (
     LEG_LEN,
     LENGTH,
@@ -35,7 +34,7 @@ CROSSING_MARGIN_S = 1.5
 GO, WAIT_HERE, WAIT_AT_END = 0.0, 1.0, 2.0
 
 
-@njit(cache=True)
+@leaf
 def crossing_ahead(state, i, s_along):  # pragma: no cover - compiled
     """(kind, crossing row's first column) for walker i: ``WAIT_HERE`` and ``SX`` at the start of a
     crossing, ``WAIT_AT_END`` and ``NSX`` near the end of the leg before one, else ``GO``."""
@@ -46,7 +45,7 @@ def crossing_ahead(state, i, s_along):  # pragma: no cover - compiled
     return GO, SX
 
 
-@njit(cache=True)
+@leaf
 def arrives_first(state, vu, speed, i, crossing):  # pragma: no cover - compiled
     """Does some road user reach the crossing (start x, y, end x, y, length) before walker i has
     left its strip of road?"""
@@ -74,7 +73,7 @@ def arrives_first(state, vu, speed, i, crossing):  # pragma: no cover - compiled
     return False
 
 
-@njit(cache=True)
+@inlined
 def must_wait(state, vu, speed, s_along, out):  # pragma: no cover - compiled
     """Per agent into ``out``: ``GO``, or the walker must give way ``WAIT_HERE`` (at the start of
     its crossing) or ``WAIT_AT_END`` (at the end of the leg before it). ``speed``: each agent's
@@ -97,7 +96,7 @@ def must_wait(state, vu, speed, s_along, out):  # pragma: no cover - compiled
             out[i] = kind
 
 
-@njit(cache=True)
+@inlined
 def needs_speeds(state, s_along):  # pragma: no cover - compiled
     """Will ``must_wait`` read the speeds this step (a walker near a crossing, a road user about)?"""
     road, walker = False, False

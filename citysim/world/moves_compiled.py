@@ -6,8 +6,8 @@ Each agent is a pymunk kinematic body (``citysim.world.bodies``): ``commit`` set
 and angular velocity that carry it to its agreed pose over the step, ``Space.step`` integrates
 them (``p + v dt``, ``a + w dt``), and ``from_bodies`` reads the poses back into the rows.
 The same floating-point operations in the same order as the numpy statement of the rules this
-replaced; arctan2 and the overlap check's geometry stay in numpy. Compiled once and cached on
-disk (``cache=True``); no parallelism, no fast-math.
+replaced; arctan2 and the overlap check's geometry stay in numpy. Compiled as ``citysim.world.jit``
+says: cached on disk, no parallelism, no fast-math.
 
 Conventions: world frame, metres, seconds, m/s; angles rad CCW from +x; ``state`` and ``vu`` as in
 ``citysim.world.rows``; ``plan`` as ``citysim.world.behaviour_compiled.plan`` leaves it.
@@ -16,8 +16,6 @@ Conventions: world frame, metres, seconds, m/s; angles rad CCW from +x; ``state`
 from __future__ import annotations
 
 import math
-
-from numba import njit
 
 from citysim.world.behaviour_compiled import (
     DS,
@@ -30,6 +28,7 @@ from citysim.world.behaviour_compiled import (
     np_max,
 )
 from citysim.world.conflicts_compiled import needs_speeds
+from citysim.world.jit import inlined, kernel
 from citysim.world.rows import (
     HEADING,
     LEG_LEN,
@@ -67,13 +66,13 @@ N_WORK = N_PLAN + 7
 NEAR_SLACK = 1e-9
 
 
-@njit(cache=True)
+@kernel
 def wrap_angle(a):  # pragma: no cover - compiled
     """Angle ``a`` wrapped to [-pi, pi): (a + pi) % 2 pi - pi, as numpy's remainder computes it."""
     return (a + PI) % TWO_PI - PI
 
 
-@njit(cache=True)
+@kernel
 def prepare(state, vu, t_s, phi, ratio):  # pragma: no cover - compiled
     """What numpy computes the step's transcendental inputs from: ``phi[i, j]`` = heading of j
     less the direction of i's leg; ``ratio`` = max(speed, 0) / max(desired speed now, 1e-9).
@@ -88,7 +87,7 @@ def prepare(state, vu, t_s, phi, ratio):  # pragma: no cover - compiled
     return needs_speeds(state, leg_frame(state, vu, t_s)[0])
 
 
-@njit(cache=True)
+@inlined
 def propose(state, vu, work, dt):  # pragma: no cover - compiled
     """The new poses of the planned moves into ``work``: facing along the leg, riders and
     drivers tilted into a swerve (``TILT_RAW``: numpy's arctan2 of the sidestep over
@@ -115,7 +114,7 @@ def propose(state, vu, work, dt):  # pragma: no cover - compiled
     return False
 
 
-@njit(cache=True)
+@inlined
 def commit(state, vu, work, dt):  # pragma: no cover - compiled
     """The velocities that make the agreed moves over ``dt`` (``VEL``, ``OMEGA``: for the bodies to
     integrate); the number of moves the overlap check cancelled. Sets each agent's velocity,
@@ -135,7 +134,7 @@ def commit(state, vu, work, dt):  # pragma: no cover - compiled
     return blocked
 
 
-@njit(cache=True)
+@kernel
 def to_bodies(state, vu, rows, out):  # pragma: no cover - compiled
     """The bodies' velocities and angular velocities in the space's order, for ``pymunk.batch``:
     ``out[3 k : 3 k + 3]`` = (vx, vy, omega) of row ``rows[k]``."""
@@ -146,7 +145,7 @@ def to_bodies(state, vu, rows, out):  # pragma: no cover - compiled
         out[3 * k + 2] = state[i, OMEGA]
 
 
-@njit(cache=True)
+@kernel
 def from_bodies(poses, rows, state):  # pragma: no cover - compiled
     """The bodies' poses, in the space's order as ``pymunk.batch`` gives them (x, y, angle of each),
     into their rows ``rows[k]``."""
@@ -157,7 +156,7 @@ def from_bodies(poses, rows, state):  # pragma: no cover - compiled
         state[i, TH] = poses[3 * k + 2]
 
 
-@njit(cache=True)
+@kernel
 def advance(state, vu, speed, dt, t_s, leg_done):  # pragma: no cover - compiled
     """After the move: gait phases (one cycle per stride), time held still by others, and
     ``leg_done[i]``: agent i has reached the end of its leg. ``speed``: each agent's speed
@@ -176,7 +175,7 @@ def advance(state, vu, speed, dt, t_s, leg_done):  # pragma: no cover - compiled
     return done
 
 
-@njit(cache=True)
+@kernel
 def move(state, vu, work, dt):  # pragma: no cover - compiled
     """``propose`` the planned moves and, if no pair may overlap, ``commit`` them: the number of
     moves cancelled, or -1 if numpy's exact overlap check must see them first."""
