@@ -156,6 +156,17 @@ class FootprintGeometry:
         return out
 
 
+    def corners_m(self, box_px: Sequence[float], plane_m: float) -> list[tuple[float, float]] | None:
+        """(forward_m, right_m) where the rays of the box's bottom-left, bottom-right, top-left and
+        top-right corners meet the plane ``plane_m`` above the ground, in that order; None for a
+        corner at or above the horizon."""
+        x, y, w, h = box_px
+        left, right, top, bottom = x - 0.5, x + w - 0.5, y - 0.5, y + h - 0.5
+        points = self.geometry.undistort(np.array([(left, bottom), (right, bottom), (left, top), (right, top)],
+                                                  np.float64)).tolist()  # fmt: skip
+        on = [self._on_plane(u, v, plane_m) for u, v in points]
+        return None if any(p is None for p in on) else on
+
     def centres_m(self, boxes_px: Sequence[Sequence[float]]) -> list[tuple[float, float] | None]:
         """(forward_m, right_m) of the middle of each box's footprint: where a body seen from above
         stands (a car's middle; an upright walker's feet, as his head's ray meets the roof plane

@@ -55,6 +55,14 @@ from detector.tracks.plausibility import (
     reject_reason,
 )
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
+from detector.tracks.steep import (
+    MIN_WHOLE_FRAMES,
+    footprint_class,
+    note_footprint,
+    piece_shift_share,
+    size_reason,
+    whole_frames,
+)
 from detector.tracks.track import POOLINGS, Track
 
 #: A box whose bottom is this close to the frame's last row reaches the frame's bottom edge (the
@@ -304,6 +312,9 @@ class TrackSet:
     def _judge(self, track: Track) -> None:
         limits = self.limits
         note_acceleration(track, limits)
+        if self.footprint is not None:  # a steep camera: a piece inside its body's outline is no jump
+            track.shift_share = piece_shift_share(track)
+            note_footprint(track, self.footprint.footprints)
         note_jump(track, limits)
         note_heading(track, limits)
         speed = track.speed_mps
@@ -316,9 +327,12 @@ class TrackSet:
         track.p_target = 1.0 - pooled[self.noise_col]
         # the likeliest target class over its life (the first of equals, as max takes it)
         track.cls = self.class_names[max(self._target_cols, key=track.log_sums.__getitem__)]
-        reason = reject_reason(track, limits)
-        if reason is None and track.p_target < self.target_threshold:
-            reason = "classified noise"
+        if self.footprint is None:
+            reason = reject_reason(track, limits)
+            if reason is None and track.p_target < self.target_threshold:
+                reason = "classified noise"
+        else:
+            reason = self._steep_reason(track)
         # a steady vehicle's motion outweighs frames that look like noise (a car's headlight spot)
         if reason is not None:
             speed_mps = overriding_speed_mps(track, reason, self.motion)
@@ -333,6 +347,16 @@ class TrackSet:
             track.target_classes[track.cls] = track.target_classes.get(track.cls, 0) + 1
         else:
             track.reasons[reason] = track.reasons.get(reason, 0) + 1
+
+    def _steep_reason(self, track: Track) -> str | None:
+        """A steep camera's judgement on the ground (``steep``): the footprint for the upright-body
+        size rules and the class, and whole-body frames for a pooled P(target) under the threshold."""
+        tolerance, threshold = self.limits.size_tolerance, self.target_threshold
+        reason = reject_reason(track, self.limits, lambda t: size_reason(t, tolerance))
+        track.cls = footprint_class(track, self.class_names, tolerance)
+        if reason is None and track.p_target < threshold and whole_frames(track, self.noise_col, threshold) < MIN_WHOLE_FRAMES:
+            reason = "classified noise"
+        return reason
 
     def _view(self, track: Track) -> TrackView:
         ground = self.ground
