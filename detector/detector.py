@@ -8,7 +8,8 @@
        down: a car's pieces by their footprint, ``detector.tracks.footprint``; its regions where
        nothing changed since the last frame, ghosts, on no track: ``detector.ghosts``)
     -> one classifier evaluation for all kept regions (section 5.4)
-    -> each track's pooled class and its physical plausibility: the target decision
+    -> each track's pooled class and its physical plausibility: the target decision (a camera
+       looking steeply down: by the track's footprint on the ground, ``detector.tracks.steep``)
 
 ``tracking=False`` is the paper's per-frame path: every region decided on its own frame
 (``is_target``: its own P(target)), with the light box tracker of ``detector.confirm`` for ids.

@@ -52,6 +52,10 @@ reason (checked in this order, the first that holds is given):
   share of its width yet ended where it began, while the ground velocity stays under
   ``still_mps``: a swaying branch or flag. A walker standing still hardly moves at all.
 
+A camera looking steeply down sees bodies from above, where the size rules' upright-body sizes
+fail: ``detector.tracks.steep`` replaces them by the track's footprint (``reject_reason``'s
+``size_reason``).
+
 Speeds are m/s on the ground, sizes m (``detector.features``), frames counted at the camera's.
 """
 

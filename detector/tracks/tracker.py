@@ -17,7 +17,10 @@ classifier:
    threshold, or it moves like a road vehicle (``motion``: straight, steady, 5-20 m/s, not
    coming toward the camera, a steady size), which outweighs frames of noise or of no Table 1
    size (a car's headlight spot going away from the camera) and, at a vehicle's speed, a width
-   no road user shows moving that way. Returns one ``TrackView`` per region.
+   no road user shows moving that way. A camera looking steeply down judges the track on the
+   ground instead (``steep``): its footprint for the upright-body size rules and its class, and
+   its whole-body frames for a pooled p_target under the threshold. Returns one ``TrackView``
+   per region.
 
 Tracks unseen for more than ``max_missed_frames`` frames end, except a target that had
 stopped (ground speed under the plausibility limits' ``still_mps``): background subtraction
