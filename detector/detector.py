@@ -4,9 +4,12 @@
     -> features of every inner region (eqs. 1-11, one undistortion call)
     -> division of regions merged with their light spot (section 5.2)
     -> tracks (section 8.2, ``detector.tracks``): regions associated with the objects of
-       earlier frames on the ground, fragments of one object joined
+       earlier frames on the ground, fragments of one object joined (a camera looking steeply
+       down: a car's pieces by their footprint, ``detector.tracks.footprint``; its regions where
+       nothing changed since the last frame, ghosts, on no track: ``detector.ghosts``)
     -> one classifier evaluation for all kept regions (section 5.4)
-    -> each track's pooled class and its physical plausibility: the target decision
+    -> each track's pooled class and its physical plausibility: the target decision (a camera
+       looking steeply down: by the track's footprint on the ground, ``detector.tracks.steep``)
 
 ``tracking=False`` is the paper's per-frame path: every region decided on its own frame
 (``is_target``: its own P(target)), with the light box tracker of ``detector.confirm`` for ids.
@@ -44,9 +47,11 @@ from detector.camera import CameraModel
 from detector.confirm import Tracker
 from detector.divide import DivisionParams, divide_rows
 from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
+from detector.ghosts import StillRegions
 from detector.roi import Crop, full_frame, range_crop
 from detector.segment import Regions, Segmenter, SegmenterParams
 from detector.split_compiled import load as load_compiled_splits
+from detector.tracks.footprint import is_steep
 from detector.tracks.tracker import TrackSet
 
 if TYPE_CHECKING:
@@ -70,9 +75,11 @@ class Detection:
     (``detector.tracks``; None on the per-frame path): ``track_cls`` the pooled class
     ('noise' unless the track is a target), ``track_p_target`` the pooled P(target),
     ``track_target`` the decision (plausible and pooled P(target) >= threshold),
-    ``track_reason`` why it is not a target; ``ground_x_m``/``ground_y_m`` the bottom
-    centre on the ground (world x along the street, y across, m), ``velocity_*_mps``
-    and ``speed_mps`` the track's ground velocity (None until known).
+    ``track_reason`` why it is not a target (``track_id`` None: a still region, a ghost of a steep
+    camera, on no track: ``detector.ghosts``); ``ground_x_m``/``ground_y_m`` the bottom
+    centre on the ground (a steep camera: the middle of the region's footprint; world x along
+    the street, y across, m), ``velocity_*_mps`` and ``speed_mps`` the track's ground velocity
+    (None until known).
     """
 
     box_px: tuple[int, int, int, int]
@@ -201,6 +208,8 @@ class Detector:
         if tracking and tracks is None:
             tracks = TrackSet(camera, self._class_names, self.target_threshold, geometry=self._geometry)
         self.tracks: TrackSet | None = tracks if tracking else None
+        # a camera looking steeply down: regions where nothing changed (ghosts) follow no track
+        self._still = StillRegions() if self.tracks is not None and is_steep(camera) else None
         # what the controllers ask is_confirmed(track_id): the tracks, or the per-frame box tracker
         self.tracker = self.tracks if self.tracks is not None else (Tracker() if tracker is None else tracker)
         self.last_regions: Regions = Regions.empty(camera.height_px, camera.width_px)
@@ -221,6 +230,8 @@ class Detector:
     def reset_background(self) -> None:
         """Rebuild the background model (call when the lamp in view switches)."""
         self.segmenter.reset()
+        if self._still is not None:
+            self._still.reset()
 
     def is_target(self, detections: Sequence[Detection]) -> bool:
         """Whether any detection is a target: its track is one (tracking), or its own P(target)
@@ -282,6 +293,8 @@ class Detector:
         rate); see ``Segmenter.apply``.
         """
         self._check_frame(gray)
+        if self._still is not None:
+            self._still.next_frame(gray)
         regions = self.segmenter.apply(gray, learning_rate)
         self.last_regions = regions
         # a frame holds a handful of regions: per-region work is plain Python on lists
@@ -319,7 +332,8 @@ class Detector:
         if len(keep) < len(rows):  # (the usual frame keeps every region: nothing to pick)
             rows, boxes, areas = [rows[j] for j in keep], [boxes[j] for j in keep], [areas[j] for j in keep]
         if self.tracks is not None:
-            prepared = self.tracks.prepare(boxes, areas, rows)
+            still = None if self._still is None else self._still.flags(regions.mask, boxes)
+            prepared = self.tracks.prepare(boxes, areas, rows, still)
             boxes, rows = prepared.boxes_px, prepared.rows
         feats = np.array(rows)
         proba, proba_lists, p_target, labels = self._classify(feats)

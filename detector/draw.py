@@ -41,7 +41,8 @@ def draw_detections(image: np.ndarray, detections: Sequence, show_noise: bool = 
         thick = size if cls == "noise" else 2 * size
         cv2.rectangle(img, (x, y), (x + w - 1, y + h - 1), colour, thick)
         if tracked:
-            label = f"#{det.track_id} {cls} {det.track_p_target:.2f} {det.features[3]:.0f}m"
+            number = "" if det.track_id is None else f"#{det.track_id} "  # None: a still region
+            label = f"{number}{cls} {det.track_p_target:.2f} {det.features[3]:.0f}m"
         else:
             label = f"{det.cls} {det.p_target:.2f} {det.features[3]:.0f}m"
         cv2.putText(img, label, (x, max(8 * size, y - 3 * size)), cv2.FONT_HERSHEY_SIMPLEX, 0.3 * size, colour, size,

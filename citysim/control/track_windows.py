@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import math
 
+from detector.tracks.tracker import STILL_REASON
+
 #: the paper's implementation switches when 2 of the last 6 frames hold a target (eq. 12)
 PAPER_K, PAPER_N = 2, 6
 #: the plausibility reasons (``detector.tracks.plausibility``) that say no road user moves so:
@@ -30,8 +32,14 @@ def frame_hit(d, threshold: float) -> bool | None:
     ``threshold``, None when a physics rule says no road user moves as its track does, else False.
     A track whose velocity is not yet known counts by its frames, so an approaching car lights its
     lamp about as soon as the frame-by-frame detector would; the track must first be seen in n
-    frames (``TrackWindows``), by when an insect's track has shown itself 'jumping' or 'too fast'."""
-    if d.track_id is not None and d.track_reason in NOT_A_ROAD_USER:
+    frames (``TrackWindows``), by when an insect's track has shown itself 'jumping' or 'too fast'.
+    A still region of a tracking detector (a camera looking steeply down: ground a car uncovered,
+    ``detector.ghosts``; track_id None, reason ``STILL_REASON``) is never a hit, whatever its own
+    P(target): the key None it would count under is no track, and its frames would add up there."""
+    if d.track_id is None:
+        if d.track_reason == STILL_REASON:  # a still region (a steep camera's ghost): no road user
+            return False
+    elif d.track_reason in NOT_A_ROAD_USER:
         return None
     return bool(d.track_target) or d.p_target >= threshold
 

@@ -52,6 +52,10 @@ reason (checked in this order, the first that holds is given):
   share of its width yet ended where it began, while the ground velocity stays under
   ``still_mps``: a swaying branch or flag. A walker standing still hardly moves at all.
 
+A camera looking steeply down sees bodies from above, where the size rules' upright-body sizes
+fail: ``detector.tracks.steep`` replaces them by the track's footprint (``reject_reason``'s
+``size_reason``).
+
 Speeds are m/s on the ground, sizes m (``detector.features``), frames counted at the camera's.
 """
 
@@ -178,8 +182,12 @@ def note_heading(track: Track, limits: PlausibilityLimits) -> None:
         track.wide_frames += 1
 
 
-def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
-    """Why no road user could have made ``track`` (None: one could)."""
+def reject_reason(track: Track, limits: PlausibilityLimits, size_reason=None) -> str | None:
+    """Why no road user could have made ``track`` (None: one could).
+
+    ``size_reason(track)``, if given, replaces the upright-body size rules ('size outside Table 1',
+    'size unsteady', 'too wide for its heading'): a camera looking steeply down judges the track's
+    footprint instead (``detector.tracks.steep``)."""
     # said as soon as seen: an insect's mark before its velocity is known (the jumps are counted
     # again below for a track whose velocity is known, so a young track's count is the only extra)
     if track.velocity_mps is None and track.box_jumps.count(True) >= limits.max_box_jumps:
@@ -194,6 +202,11 @@ def reject_reason(track: Track, limits: PlausibilityLimits) -> str | None:
         return "erratic"
     if track.box_jumps.count(True) >= limits.max_box_jumps:
         return "jumping"
+    if size_reason is not None:
+        reason = size_reason(track)
+        if reason is None and not speed >= limits.still_mps and _sways(track, limits):
+            return "oscillating in place"
+        return reason
     heights = track.heights_m
     if table1_misfit(median(track.widths_m), median(heights)) > limits.size_tolerance:
         return "size outside Table 1"

@@ -149,6 +149,8 @@ class Track:
     velocities: deque = field(default_factory=deque)
     widths_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
     heights_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
+    #: a steep camera's least footprints (long, short) m (``detector.tracks.steep``; else empty)
+    footprints_m: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
     #: box sizes in the image, px, and their medians (the prediction's size)
     widths_px: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))
     heights_px: deque = field(default_factory=lambda: deque(maxlen=SIZE_FRAMES))

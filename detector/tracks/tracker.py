@@ -3,16 +3,24 @@
 ``TrackSet`` is what ``detector.detector.Detector`` calls per frame, in two steps around the
 classifier:
 
-1. ``prepare(boxes, areas, rows)``: ground points of the regions (``ground``), their
+1. ``prepare(boxes, areas, rows, still)``: ground points of the regions (``ground``), their
    association with the tracks (``associate``) and the joining of fragments (``reunite``);
-   returns the regions to classify (joined ones with recomputed features);
+   returns the regions to classify (joined ones with recomputed features). A camera looking
+   steeply down (``footprint.is_steep``) first joins a car's pieces by their footprint on the
+   ground, places regions at their footprint's middle and lets a piece left over continue the
+   track it lies in (``footprint``); regions where nothing moved (``still``, the detector's
+   ghosts: ``detector.ghosts``) join nothing and follow no track (their view's ``track_id`` is
+   None, never a target), listed last;
 2. ``update(prepared, probabilities)``: every track continued or started, its pooled class
    and p_target (``track.pool_probabilities``), its plausibility (``plausibility``) and its
    target decision: a target track is plausible and its pooled p_target reaches the
    threshold, or it moves like a road vehicle (``motion``: straight, steady, 5-20 m/s, not
    coming toward the camera, a steady size), which outweighs frames of noise or of no Table 1
    size (a car's headlight spot going away from the camera) and, at a vehicle's speed, a width
-   no road user shows moving that way. Returns one ``TrackView`` per region.
+   no road user shows moving that way. A camera looking steeply down judges the track on the
+   ground instead (``steep``): its footprint for the upright-body size rules and its class, and
+   its whole-body frames for a pooled p_target under the threshold. Returns one ``TrackView``
+   per region.
 
 Tracks unseen for more than ``max_missed_frames`` frames end, except a target that had
 stopped (ground speed under the plausibility limits' ``still_mps``): background subtraction
@@ -39,6 +47,7 @@ from typing import NamedTuple
 from detector.camera import CameraModel
 from detector.features import RegionGeometry
 from detector.tracks.associate import Gates, associate
+from detector.tracks.footprint import FootprintJoiner, FootprintParams, continue_inside, is_steep
 from detector.tracks.ground import GroundProjector
 from detector.tracks.motion import MotionLimits, motion_class, overriding_speed_mps
 from detector.tracks.plausibility import (
@@ -49,16 +58,29 @@ from detector.tracks.plausibility import (
     reject_reason,
 )
 from detector.tracks.reunite import ReuniteParams, fragment_groups, union_box
+from detector.tracks.steep import (
+    MIN_WHOLE_FRAMES,
+    footprint_class,
+    note_footprint,
+    piece_shift_share,
+    size_reason,
+    whole_frames,
+)
 from detector.tracks.track import POOLINGS, Track
 
 #: A box whose bottom is this close to the frame's last row reaches the frame's bottom edge (the
 #: mask's opening trims the rows at the border: walkers leaving suburban_night's view under the
 #: pole ended at rows 237-239 of 240).
 EXIT_MARGIN_PX = 3
+#: ``Prepared.track_of`` of a still region (``detector.ghosts``): it follows no track
+STILL = -2
+#: Why a still region is no target
+STILL_REASON = "still (a ghost)"
 _DEFAULT_LIMITS = PlausibilityLimits()
 _DEFAULT_MOTION = MotionLimits()
 _DEFAULT_GATES = Gates()
 _DEFAULT_REUNITE = ReuniteParams()
+_DEFAULT_FOOTPRINT = FootprintParams()
 
 
 class TrackView(NamedTuple):
@@ -67,7 +89,7 @@ class TrackView(NamedTuple):
     A named tuple, not a frozen dataclass: one is made per region per frame, and a frozen
     dataclass sets its ten fields one call at a time (0.8 us against 0.2 us, measured)."""
 
-    track_id: int
+    track_id: int | None  # None: a still region (``detector.ghosts``), on no track
     cls: str
     p_target: float
     target: bool
@@ -105,6 +127,7 @@ class TrackSet:
         motion: MotionLimits = _DEFAULT_MOTION,
         gates: Gates = _DEFAULT_GATES,
         reunite: ReuniteParams | None = _DEFAULT_REUNITE,
+        footprint: FootprintParams | None = _DEFAULT_FOOTPRINT,
         pooling: str = "mean_log",
         max_missed_frames: int = 5,
         still_hold_s: float = 10.0,
@@ -122,6 +145,13 @@ class TrackSet:
         self.exit_row_px = camera.height_px - EXIT_MARGIN_PX
         self.geometry = RegionGeometry(camera) if geometry is None else geometry
         self.ground = GroundProjector(camera, self.geometry)
+        # a camera looking steeply down joins a car's pieces by their footprint (``footprint``)
+        self.footprint = (
+            FootprintJoiner(camera, self.geometry, footprint) if footprint is not None and is_steep(camera) else None
+        )
+        # where a region stands: its box's bottom centre (an upright body's feet), or for a steep
+        # camera the middle of its footprint (a body seen from above; ``footprint``)
+        self._grounds = self.ground.bottom_centres if self.footprint is None else self.footprint.footprints.centres_m
         self.class_names = list(class_names)
         self.noise_col = self.class_names.index("noise")
         self._target_cols = [c for c in range(len(self.class_names)) if c != self.noise_col]
@@ -154,14 +184,32 @@ class TrackSet:
         return any(t.track_id == track_id and t.hit_bits.bit_count() >= self.confirm_k for t in self.tracks)
 
     # ------------------------------------------------------------------ step 1
-    def prepare(self, boxes_px: list, areas_px: list, rows: list) -> Prepared:
-        """Associate this frame's regions (feature rows all with a ground point) and join fragments."""
+    def prepare(self, boxes_px: list, areas_px: list, rows: list, still: list[bool] | None = None) -> Prepared:
+        """Associate this frame's regions (feature rows all with a ground point) and join fragments.
+
+        ``still``: per region, whether nothing moved in it (``detector.ghosts``); still regions
+        join nothing and follow no track (``STILL``), listed after the others."""
         self.frame += 1
-        grounds = self.ground.bottom_centres(boxes_px)
+        ghosts = None
+        if still is not None and any(still):
+            ghosts = [(b, a, r) for b, a, r, s in zip(boxes_px, areas_px, rows, still, strict=True) if s]
+            moving = [i for i, s in enumerate(still) if not s]
+            boxes_px, areas_px, rows = [boxes_px[i] for i in moving], [areas_px[i] for i in moving], [rows[i] for i in moving]
+        if self.footprint is not None and len(boxes_px) > 1:
+            boxes_px, areas_px, rows = self.footprint.join(boxes_px, areas_px, rows)
+        grounds = self._grounds(boxes_px)
         track_of = associate(self.tracks, boxes_px, grounds, self.frame, self.gates)
+        if self.footprint is not None and self.reunite is not None:
+            continue_inside(self.tracks, boxes_px, track_of, self.reunite.min_inside_share)
         prepared = Prepared(boxes_px, areas_px, rows, grounds, track_of, [])
         if self.reunite is not None and len(boxes_px) > 1:
             self._join(prepared)
+        if ghosts:
+            boxes, areas, ghost_rows = (list(column) for column in zip(*ghosts, strict=True))
+            p = prepared
+            p.boxes_px, p.areas_px, p.rows = p.boxes_px + boxes, p.areas_px + areas, p.rows + ghost_rows
+            p.grounds = p.grounds + self._grounds(boxes)
+            p.track_of = p.track_of + [STILL] * len(boxes)
         return prepared
 
     def _join(self, p: Prepared) -> None:
@@ -180,7 +228,7 @@ class TrackSet:
             box = union_box([p.boxes_px[i] for i in group])
             area = sum(p.areas_px[i] for i in group)
             row = geometry.rows([box], [area])[0]
-            ground = self.ground.bottom_centres([box])[0]
+            ground = self._grounds([box])[0]
             if row is None or ground is None:
                 continue
             p.boxes_px[keep], p.areas_px[keep], p.rows[keep], p.grounds[keep] = box, area, row, ground
@@ -205,6 +253,9 @@ class TrackSet:
         views_tracks: list[Track] = []
         for i, t in enumerate(p.track_of):
             row, proba = p.rows[i], probabilities[i]
+            if t == STILL:
+                views_tracks.append(None)
+                continue
             if t >= 0:
                 track = tracks[t]
                 track.observe(frame, p.boxes_px[i], p.grounds[i], row, proba)
@@ -232,6 +283,8 @@ class TrackSet:
             else:
                 survivors.append(track)
         self.tracks = survivors
+        if STILL in p.track_of:  # still regions: views of no track
+            return [self._view(t) if t is not None else self._still_view(p.grounds[i]) for i, t in enumerate(views_tracks)]
         return list(map(self._view, views_tracks))
 
     def age(self) -> None:
@@ -262,6 +315,9 @@ class TrackSet:
     def _judge(self, track: Track) -> None:
         limits = self.limits
         note_acceleration(track, limits)
+        if self.footprint is not None:  # a steep camera: a piece inside its body's outline is no jump
+            track.shift_share = piece_shift_share(track)
+            note_footprint(track, self.footprint.footprints)
         note_jump(track, limits)
         note_heading(track, limits)
         speed = track.speed_mps
@@ -274,9 +330,12 @@ class TrackSet:
         track.p_target = 1.0 - pooled[self.noise_col]
         # the likeliest target class over its life (the first of equals, as max takes it)
         track.cls = self.class_names[max(self._target_cols, key=track.log_sums.__getitem__)]
-        reason = reject_reason(track, limits)
-        if reason is None and track.p_target < self.target_threshold:
-            reason = "classified noise"
+        if self.footprint is None:
+            reason = reject_reason(track, limits)
+            if reason is None and track.p_target < self.target_threshold:
+                reason = "classified noise"
+        else:
+            reason = self._steep_reason(track)
         # a steady vehicle's motion outweighs frames that look like noise (a car's headlight spot)
         if reason is not None:
             speed_mps = overriding_speed_mps(track, reason, self.motion)
@@ -292,6 +351,16 @@ class TrackSet:
         else:
             track.reasons[reason] = track.reasons.get(reason, 0) + 1
 
+    def _steep_reason(self, track: Track) -> str | None:
+        """A steep camera's judgement on the ground (``steep``): the footprint for the upright-body
+        size rules and the class, and whole-body frames for a pooled P(target) under the threshold."""
+        tolerance, threshold = self.limits.size_tolerance, self.target_threshold
+        reason = reject_reason(track, self.limits, lambda t: size_reason(t, tolerance))
+        track.cls = footprint_class(track, self.class_names, tolerance)
+        if reason is None and track.p_target < threshold and whole_frames(track, self.noise_col, threshold) < MIN_WHOLE_FRAMES:
+            reason = "classified noise"
+        return reason
+
     def _view(self, track: Track) -> TrackView:
         ground = self.ground
         x_m, y_m = ground.to_world(track.forward_m, track.right_m)
@@ -303,6 +372,11 @@ class TrackSet:
             speed = math.hypot(*velocity)  # track.speed_mps without the property's second look-up
         cls = track.cls if track.target else "noise"
         return TrackView(track.track_id, cls, track.p_target, track.target, track.reason, x_m, y_m, vx, vy, speed)
+
+    def _still_view(self, ground) -> TrackView:
+        """A still region's view (``detector.ghosts``): no track, noise, where it stands."""
+        x_m, y_m = self.ground.to_world(*ground)
+        return TrackView(None, "noise", 0.0, False, STILL_REASON, x_m, y_m, None, None, None)
 
     def _end(self, track: Track) -> None:
         if self.keep_ended:
