@@ -41,6 +41,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.linalg import _umath_linalg
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
@@ -116,8 +117,8 @@ class LocatedTrack:
             return
         recent = self.recent(t_s - VELOCITY_WINDOW_S)
         if len(recent) >= 3 and recent[-1][0] - recent[0][0] >= 0.3:
-            ts, xs = np.array(recent).T
-            self.vx_mps = line_slope(ts - ts[0], xs)
+            t0_s = recent[0][0]  # times from the first: the IEEE subtraction ts - ts[0] made elementwise
+            self.vx_mps = line_slope([t_s - t0_s for t_s, _ in recent], [x_m for _, x_m in recent])
 
     def recent(self, since_s: float) -> list[tuple[float, float]]:
         """The positions seen at ``since_s`` or later, oldest first: a tail of ``seen``, whose times
@@ -135,24 +136,40 @@ class LocatedTrack:
         return x_last + (self.heading_vx_mps or 0.0) * (t_s - t_last)
 
 
-def line_slope(x: np.ndarray, y: np.ndarray) -> float:
-    """The slope of ``np.polyfit(x, y, 1)`` (x, y: 1-d float64), by its steps for a line without
-    the wrappers' checks (~20k fits an hour at 22:00; they were two thirds of the cost): the same
-    arrays through the same numpy operations (the Vandermonde matrix [x, 1], scaled by its
-    columns' norms; ``np.linalg.lstsq`` with polyfit's rcond), so the slope is polyfit's bit for
-    bit (the tests compare them). Polyfit's warning for a rank-deficient fit is left out: the
-    times here span 0.3 s or more."""
-    x, y = x + 0.0, y + 0.0
-    lhs = np.empty((len(x), 2))  # np.vander(x, 2): x, then ones
+def line_slope(x: Sequence[float], y: Sequence[float]) -> float:
+    """The slope of ``np.polyfit(x, y, 1)`` (x, y: 1-d float64 arrays, or lists of floats), by its
+    steps for a line without the wrappers' checks (~20k fits an hour at 22:00; they were two thirds
+    of the cost): the same arrays through the same numpy operations (x + 0.0 and y + 0.0; the
+    Vandermonde matrix [x, 1], scaled by its columns' norms; the least-squares solver
+    ``np.linalg.lstsq`` calls, with polyfit's rcond, under lstsq's error state), so the slope is
+    polyfit's bit for bit (the tests compare them). Polyfit's warning for a rank-deficient fit is
+    left out: the times here span 0.3 s or more."""
+    n = len(x)
+    lhs = np.empty((n, 2))  # np.vander(x + 0.0, 2): x, then ones
     lhs[:, 0] = x
+    lhs[:, 0] += 0.0  # polyfit's asarray(x) + 0.0 (a -0.0 becomes 0.0)
     lhs[:, 1] = 1.0
-    scale = np.sqrt((lhs * lhs).sum(axis=0))
+    rhs = np.empty((n, 1))  # lstsq's b[:, newaxis] of y + 0.0
+    rhs[:, 0] = y
+    rhs += 0.0
+    scale = np.sqrt(np.add.reduce(lhs * lhs, axis=0))  # what (lhs * lhs).sum(axis=0) calls
     lhs /= scale
-    c = np.linalg.lstsq(lhs, y, len(x) * _EPS)[0]
-    return float(c[0] / scale[0])
+    c = _lstsq_solution(lhs, rhs, n * _EPS)
+    return float(c[0, 0] / scale[0])
 
 
 _EPS = float(np.finfo(np.float64).eps)
+
+
+def _raise_linalgerror_lstsq(err, flag):
+    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+
+
+@np.errstate(call=_raise_linalgerror_lstsq, invalid="call", over="ignore", divide="ignore", under="ignore")
+def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
+    """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` for float64 (m, 2) and (m, 1) arrays, m >= 2: its
+    solver with its signature under its error state (an SVD that does not converge raises)."""
+    return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
 
 
 def blind_end_lamps(street: Street) -> list[int]:

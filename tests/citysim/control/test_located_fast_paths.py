@@ -1,0 +1,32 @@
+"""detector_located's fast paths give what the code they replaced gave, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from citysim.control import located
+
+
+def test_the_line_slope_of_lists_is_polyfits_of_the_positions_array():
+    # LocatedTrack.observe passes lists (times from the first, positions); it used to pass
+    # np.array(recent).T's columns, the times less the first
+    rng = np.random.default_rng(11)
+    for n in list(range(3, 30)) * 30:
+        recent = [(t_s, x_m) for t_s, x_m in zip((100.0 * rng.random() + np.cumsum(rng.uniform(0.03, 0.2, n))).tolist(),
+                                                 (rng.uniform(-50, 400) + rng.normal(0, 8) * np.arange(n) / 15
+                                                  + rng.normal(0, 0.3, n)).tolist(), strict=True)]  # fmt: skip
+        if n % 5 == 0:
+            recent[1] = (recent[1][0], -0.0)  # polyfit's + 0.0 makes it 0.0
+        ts, xs = np.array(recent).T
+        t0_s = recent[0][0]
+        got = located.line_slope([t - t0_s for t, _ in recent], [x for _, x in recent])
+        assert got == float(np.polyfit(ts - ts[0], xs, 1)[0])
+
+
+def test_a_fit_that_does_not_converge_raises_as_lstsq_does():
+    import pytest
+
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.lstsq(np.array([[np.nan, 1.0], [1.0, 1.0], [2.0, 1.0]]), np.ones(3))
+    with pytest.raises(np.linalg.LinAlgError):
+        located._lstsq_solution(np.array([[np.nan, 1.0], [1.0, 1.0], [2.0, 1.0]]), np.ones((3, 1)), 1e-15)
