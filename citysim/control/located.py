@@ -165,11 +165,29 @@ def _raise_linalgerror_lstsq(err, flag):
     raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
 
 
-@np.errstate(call=_raise_linalgerror_lstsq, invalid="call", over="ignore", divide="ignore", under="ignore")
-def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
-    """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` for float64 (m, 2) and (m, 1) arrays, m >= 2: its
-    solver with its signature under its error state (an SVD that does not converge raises)."""
-    return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
+_LSTSQ_ERRORS = {"call": _raise_linalgerror_lstsq, "invalid": "call", "over": "ignore", "divide": "ignore",
+                 "under": "ignore"}  # fmt: skip
+
+try:  # numpy's error state as np.errstate sets it, made once (np.errstate makes it per call: ~4 us a fit)
+    from numpy._core.umath import _extobj_contextvar, _make_extobj
+
+    _LSTSQ_EXTOBJ = _make_extobj(**_LSTSQ_ERRORS)
+
+    def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
+        """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` for float64 (m, 2) and (m, 1) arrays, m >= 2: its
+        solver with its signature under its error state (an SVD that does not converge raises)."""
+        token = _extobj_contextvar.set(_LSTSQ_EXTOBJ)
+        try:
+            return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
+        finally:
+            _extobj_contextvar.reset(token)
+
+except ImportError:  # another numpy: its public np.errstate, made per call
+
+    @np.errstate(**_LSTSQ_ERRORS)
+    def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
+        """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` (see above)."""
+        return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
 
 
 def blind_end_lamps(street: Street) -> list[int]:
@@ -223,6 +241,7 @@ class DetectorLocated(DetectorPerFrame):
                        + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
         self.blind_end_lamps = blind_end_lamps(ctx.street) if ctx.spec.light_blind_ends in (None, True) else []
         self.next_blind_end_s = 0.0
+        self.camera_lamps = ctx.camera_lamps  # read per placement (the context's property makes the tuple anew)
 
     def lead_s(self, cls: str) -> float:
         return self.base_lead_s + CLASS_MARGIN_S.get(cls, 1.0)
@@ -300,7 +319,7 @@ class DetectorLocated(DetectorPerFrame):
                 continue  # nothing on the street moves like that: an insect at the lens, a flicker
             track.prior_vx_mps = self.lane_prior_mps(cls, ground_y_m)
             zones = self.zones_for(ground_x_m, track.heading_vx_mps, track.cls)
-            self.light_zones(self.ctx.camera_lamps[camera_index], t_s, zones)
+            self.light_zones(self.camera_lamps[camera_index], t_s, zones)
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)
@@ -313,18 +332,18 @@ class DetectorLocated(DetectorPerFrame):
         self.next_extrapolation_s = t_s + 0.25
         stale_after_s = 2.0 * self.ctx.frame_period_s
         for key, track in list(self.tracks.items()):
-            t_last, _ = track.last
-            gone_s = t_s - t_last
+            gone_s = t_s - track.seen[-1][0]
+            if gone_s <= stale_after_s:
+                continue  # seen within two frames: neither forgotten nor extrapolated (the checks below)
             vx_mps = track.heading_vx_mps
             travelled_m = abs(vx_mps or 0.0) * gone_s
             if (gone_s > EXTRAPOLATE_S.get(track.cls, 20.0) or travelled_m > EXTRAPOLATE_M.get(track.cls, 20.0)
                     or vx_mps is None):
-                if gone_s > stale_after_s:
-                    del self.tracks[key]
+                del self.tracks[key]
                 continue
-            if gone_s <= stale_after_s or abs(vx_mps) > IMPLAUSIBLE_MPS:
+            if abs(vx_mps) > IMPLAUSIBLE_MPS:
                 continue
-            self.light_zones(self.ctx.camera_lamps[key[0]], t_s,
+            self.light_zones(self.camera_lamps[key[0]], t_s,
                              self.zones_for(track.predicted_x_m(t_s), vx_mps, track.cls))
 
     def on_message(self, lamp_index, t_s, message):

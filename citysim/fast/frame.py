@@ -38,19 +38,19 @@ class SensedTruth:
 
     @property
     def x(self) -> int:
-        return self.box_px[0]
+        return (self._box or self.box_px)[0]  # the box once projected, without a second property call
 
     @property
     def y(self) -> int:
-        return self.box_px[1]
+        return (self._box or self.box_px)[1]  # the box once projected, without a second property call
 
     @property
     def w(self) -> int:
-        return self.box_px[2]
+        return (self._box or self.box_px)[2]  # the box once projected, without a second property call
 
     @property
     def h(self) -> int:
-        return self.box_px[3]
+        return (self._box or self.box_px)[3]  # the box once projected, without a second property call
 
 
 class SensedFrame:
@@ -74,6 +74,6 @@ class SensedFrame:
                 pairs = s.step_pairs()
                 first, end = pairs.bounds(i)
                 agents, forward_m = pairs.agents[first:end], pairs.forward_m[first:end]
-                self._truth = tuple(SensedTruth(s, i, j, f_m <= DETECTOR_RANGE_M)
-                                    for j, f_m in zip(agents, forward_m, strict=True))  # fmt: skip
+                self._truth = tuple([SensedTruth(s, i, j, f_m <= DETECTOR_RANGE_M)
+                                     for j, f_m in zip(agents, forward_m, strict=True)])  # fmt: skip
         return self._truth

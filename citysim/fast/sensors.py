@@ -234,19 +234,25 @@ class SensedDetector:
     def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
         lamps_lit = s.lamps_lit()
-        pairs = s.step_pairs() if s.agents else None  # None: an empty street
-        seen = pairs is not None and pairs.counts[i] > 0
-        detections = self._candidates(k, is_young(learning_rate), lamps_lit) if seen else []
-        beams = s.beams_of(i) if pairs is not None and pairs.beams else _NO_INDICES
-        if len(beams):
-            detections += self._beams(beams, k, is_young(learning_rate))
+        detections: list[Detection] = []
+        seen = has_beams = False
+        if s.agents:  # else an empty street: no candidate, no beam
+            pairs = s.step_pairs()
+            seen = pairs.counts[i] > 0
+            if seen:
+                detections = self._candidates(k, is_young(learning_rate), lamps_lit)
+            if pairs.beams:  # most steps: no beam in any camera's view
+                beams = s.beams_of(i)
+                has_beams = len(beams) > 0
+                if has_beams:
+                    detections += self._beams(beams, k, is_young(learning_rate))
         lit = lamps_lit[i]
         if self.fa_left == 0 and self.fa_may_start and self.rng.random() < s.model.fa_start_p[lit]:
             self._start_false_alarm()
         fa = self._false_alarm(k) if self.fa_left else None
         if fa is not None:
             detections.append(fa)
-        busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
+        busy = seen or has_beams or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
         self.last_regions = (True,) if busy else ()
         return detections
 
@@ -257,13 +263,16 @@ class SensedDetector:
         pairs = s.step_pairs()
         first, end = pairs.bounds(i)
         idx = pairs.agents[first:end]
-        agents = [s.agents[j] for j in idx]
-        fwd = pairs.forward_m[first:end]
+        step_agents, persistence = s.agents, s.persistence_list
+        agents = [step_agents[j] for j in idx]
         p = pairs.p_hit(i, s.p_hit_flat, lamps_lit, young)
-        rho = [s.persistence_list[kind] for kind in pairs.kind[first:end]]
+        rho = [persistence[kind] for kind in pairs.kind[first:end]]
         hits = self._chain_draws([a.object_id for a in agents], p, rho, k)
-        out = [self._hit_detection(a, idx[n], fwd[n], self._drawn_class(a.cls))
-               for n, a in enumerate(agents) if hits[n]]  # fmt: skip
+        out = []
+        if True in hits:  # most frames with someone in view: no hit
+            fwd = pairs.forward_m
+            out = [self._hit_detection(a, idx[n], fwd[first + n], self._drawn_class(a.cls))
+                   for n, a in enumerate(agents) if hits[n]]  # fmt: skip
         if len(self.previous) > 512:
             self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
         return out
@@ -273,16 +282,15 @@ class SensedDetector:
         with the cell's P and its kind's persistence ``rho``, stepped from the last frame's draw;
         every draw is kept for the next frame and told to the k-of-n tracker. Plain floats: the
         same IEEE operations numpy's float64 did, a tenth of the cost on a frame's few candidates."""
-        previous = self.previous
+        previous, k_before = self.previous, k - 1
         for n, key in enumerate(keys):
             prev = previous.get(key)
-            if prev is not None and prev[0] == k - 1:  # the chain's step from the last frame's draw
+            if prev is not None and prev[0] == k_before:  # the chain's step from the last frame's draw
                 p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
         hits = [draw < p_hit for draw, p_hit in zip(self.rng.random(len(keys)).tolist(), p, strict=True)]
-        update = self.tracker.update
         for key, hit in zip(keys, hits, strict=True):
             previous[key] = (k, hit)
-            update(k, key, hit)
+        self.tracker.update_all(k, keys, hits)
         return hits
 
     def _drawn_class(self, kind: str) -> str:
