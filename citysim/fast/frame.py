@@ -20,7 +20,7 @@ class SensedTruth:
     __slots__ = ("object_id", "cls", "fully_visible", "_sensors", "_agents", "_lamp_index", "_agent_index", "_box")
 
     def __init__(self, sensors, lamp_index: int, agent_index: int, fully_visible: bool):
-        agent = sensors.agents[agent_index]
+        agent = sensors.step_agents[agent_index]  # its id and class (the step's snapshots not made)
         self.object_id: int = agent.object_id
         self.cls: str = agent.cls
         self.fully_visible = fully_visible

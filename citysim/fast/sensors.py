@@ -36,6 +36,7 @@ from citysim.fast.model import (
 )
 from citysim.fast.pairs import CandidatePairs, StepPairs
 from citysim.fast.records import is_young
+from citysim.fast.step_agents import StepAgents
 from citysim.fast.steps import StepGeometries
 from detector.detector import Detection
 from detector.segment import SegmenterParams
@@ -68,6 +69,8 @@ class FastSensors:
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
         self.frame_k = -1
         self.agents: list = []
+        #: ``agents[j]`` as sensing reads them, without a replayed step's snapshots made (``citysim.fast.step_agents``)
+        self.step_agents = StepAgents(self.agents)
         self.levels = np.zeros(self.geometry.n)
         #: when the lamps' levels last changed: only the threshold baselines' segmenters read it, so
         #: it is kept (every observed frame) only once one of them is made
@@ -99,6 +102,7 @@ class FastSensors:
             if agents or self.agents:
                 self.step = self.steps.of(agents, rows)
             self.agents = agents
+            self.step_agents = StepAgents(agents)
             self._boxes = {}
             self._pairs = {}
             self._step_pairs = None
@@ -161,7 +165,7 @@ class FastSensors:
             idx = pairs.agents[first:end]
             if agent_index not in idx:
                 idx = [agent_index]
-            for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
+            for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.step_agents[j] for j in idx]), strict=True):
                 self._boxes[(lamp_index, j)] = box
         return self._boxes[key]
 
@@ -214,16 +218,14 @@ class SensedDetector:
         self.tracker = SensedTracker()
         self.rng = sensors.rngs[lamp_index]
         self.last_regions: tuple = ()
+        #: ``Detector.motion_in_band``: a drawn frame's regions are all within range, so whether it
+        #: has any (a plain attribute: the sense loop reads every camera's every frame)
+        self.motion_in_band = False
         self.previous: dict[int, tuple[int, bool]] = {}  # object id -> (frame, hit)
         self.fa_left = 0
         self.fa_may_start = bool(sensors.model.fa_reports)  # else ``_false_alarm`` draws nothing, reports nothing
         self.fa_report: tuple | None = None
         self.fa_track = 0
-
-    @property
-    def motion_in_band(self) -> bool:
-        """``Detector.motion_in_band``: a drawn frame's regions are all within range."""
-        return bool(self.last_regions)
 
     def reset_background(self) -> None:
         self.segmenter.reset()
@@ -254,6 +256,7 @@ class SensedDetector:
             detections.append(fa)
         busy = seen or has_beams or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
         self.last_regions = (True,) if busy else ()
+        self.motion_in_band = bool(busy)
         return detections
 
     def _candidates(self, k: int, young: bool, lamps_lit: list[int]) -> list[Detection]:
@@ -263,7 +266,7 @@ class SensedDetector:
         pairs = s.step_pairs()
         first, end = pairs.bounds(i)
         idx = pairs.agents[first:end]
-        step_agents, persistence = s.agents, s.persistence_list
+        step_agents, persistence = s.step_agents, s.persistence_list
         agents = [step_agents[j] for j in idx]
         p = pairs.p_hit(i, s.p_hit_flat, lamps_lit, young)
         rho = [persistence[kind] for kind in pairs.kind[first:end]]
@@ -287,9 +290,11 @@ class SensedDetector:
             prev = previous.get(key)
             if prev is not None and prev[0] == k_before:  # the chain's step from the last frame's draw
                 p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
-        hits = [draw < p_hit for draw, p_hit in zip(self.rng.random(len(keys)).tolist(), p, strict=True)]
-        for key, hit in zip(keys, hits, strict=True):
+        hits = []
+        for key, draw, p_hit in zip(keys, self.rng.random(len(keys)).tolist(), p, strict=True):
+            hit = draw < p_hit
             previous[key] = (k, hit)
+            hits.append(hit)
         self.tracker.update_all(k, keys, hits)
         return hits
 
@@ -314,7 +319,7 @@ class SensedDetector:
         """Draws for the beams of road users out of view (kind ``BEAM``, each its own chain and
         track), reported where the light is: the patch at the beam's middle."""
         s, i, kind = self.sensors, self.lamp_index, KINDS.index(BEAM)
-        agents = [s.agents[j] for j in idx.tolist()]
+        agents = [s.step_agents[j] for j in idx.tolist()]
         fwd = s.cand.beam_forward_m[idx, i]
         light = s.geometry.light_at(np.array([beam_x_m(a) for a in agents]), s.levels)
         cells = cell_of(np.full(len(agents), kind), fwd, s.cand.beam_bearing_rad[idx, i], light,
@@ -372,7 +377,7 @@ class SensedSegmenter(_LearningRate):
         s, i = self.sensors, self.lamp_index
         idx, beams = s.candidates_of(i), s.beams_of(i)
         if len(idx) or len(beams):
-            kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
+            kind, forward_m = nearest_in_view(np.array([KINDS.index(s.step_agents[j].cls) for j in idx.tolist()]),
                                               s.cand.forward_m[idx, i], s.cand.beam_forward_m[beams, i])
         else:  # nothing in view: what nearest_in_view says of no candidate and no beam
             kind, forward_m = -1, math.nan
