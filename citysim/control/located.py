@@ -279,8 +279,12 @@ class DetectorLocated(DetectorPerFrame):
 
     def on_frame(self, camera_index, t_s, image):
         detections = self.detect(camera_index, t_s, image)
-        if detections is not None:
+        if detections:
             self.place(camera_index, t_s, detections)
+        elif detections is not None:  # most judged frames: the windows age (when they hold any), nothing is placed
+            window = self.windows[camera_index]
+            if window.bits or window.seen:  # else ``update({})`` changes nothing
+                window.update({})
         return detections
 
     def place(self, camera_index: int, t_s: float, detections) -> None:
