@@ -35,6 +35,7 @@ stays for detections without a track.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections import deque
 from collections.abc import Sequence
@@ -221,6 +222,10 @@ class DetectorLocated(DetectorPerFrame):
         self.zone_start_m = np.array([s.zone_start_m for s in ctx.street.lamps])
         self.zone_end_m = np.array([s.zone_end_m for s in ctx.street.lamps])
         self.zone_bounds_m = list(zip(self.zone_start_m.tolist(), self.zone_end_m.tolist(), strict=True))
+        self.zone_starts_m, self.zone_ends_m = self.zone_start_m.tolist(), self.zone_end_m.tolist()
+        # zones in order along the street (starts and ends ascending): the zones a stretch meets are a run
+        self.zones_in_order = self.zone_starts_m == sorted(self.zone_starts_m) and self.zone_ends_m == sorted(
+            self.zone_ends_m)  # fmt: skip
         net, lum = ctx.network.spec, ctx.luminaire
         # dim -> full, the radio's worst usual delay, one frame: the lead every class needs
         self.base_lead_s = ((1.0 - lum.dim_level) * lum.ramp_up_s + (net.latency_ms + 3.0 * net.jitter_ms) / 1000.0
@@ -263,6 +268,8 @@ class DetectorLocated(DetectorPerFrame):
             ahead_m = vx_mps * self.lead_s(cls)
             lo_m, hi_m = min(x_m, x_m + ahead_m), max(x_m, x_m + ahead_m)
         # plain floats, compared as numpy compared them: a lamp's zone per ~100k placements an hour
+        if self.zones_in_order:  # the run of zones ending after lo_m and starting at or before hi_m
+            return list(range(bisect.bisect_right(self.zone_ends_m, lo_m), bisect.bisect_right(self.zone_starts_m, hi_m)))
         return [j for j, (start_m, end_m) in enumerate(self.zone_bounds_m) if start_m <= hi_m and end_m > lo_m]
 
     def light_zones(self, camera_lamp: int, t_s: float, zones: Sequence[int]) -> None:

@@ -68,7 +68,7 @@ class SensedFrame:
     def truth(self) -> tuple:
         if self._truth is None:
             s, i = self.sensors, self.lamp_index
-            if not s.agents or not s.step_pairs().counts[i]:  # no candidate in view
+            if not s.any_agents or not s.step_pairs().counts[i]:  # no candidate in view
                 self._truth = ()
             else:  # the camera's candidates and their forward distances, from the step's lists
                 pairs = s.step_pairs()

@@ -69,6 +69,7 @@ class FastSensors:
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
         self.frame_k = -1
         self.agents: list = []
+        self.any_agents = False  # bool(agents), kept: a replayed step's sequence answers it by a call
         #: ``agents[j]`` as sensing reads them, without a replayed step's snapshots made (``citysim.fast.step_agents``)
         self.step_agents = StepAgents(self.agents)
         self.levels = np.zeros(self.geometry.n)
@@ -102,6 +103,7 @@ class FastSensors:
             if agents or self.agents:
                 self.step = self.steps.of(agents, rows)
             self.agents = agents
+            self.any_agents = bool(agents)
             self.step_agents = StepAgents(agents)
             self._boxes = {}
             self._pairs = {}
@@ -121,7 +123,7 @@ class FastSensors:
     def awake_cameras(self) -> list[bool]:
         """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
         if self._awake is None:
-            self._awake = self.step.awake() if self.agents else [False] * self.geometry.n
+            self._awake = self.step.awake() if self.any_agents else [False] * self.geometry.n
         return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
@@ -130,13 +132,13 @@ class FastSensors:
 
     def beams_of(self, lamp_index: int) -> np.ndarray:
         """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
-        if not self.agents or not self.step_pairs().beams:  # most steps: no beam in any camera's view
+        if not self.any_agents or not self.step_pairs().beams:  # most steps: no beam in any camera's view
             return _NO_INDICES
         return self._indices_seen("beam_seen", lamp_index)
 
     def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
         """The candidates ``cand.<matrix>`` marks for camera ``lamp_index`` (ascending)."""
-        if not self.agents:
+        if not self.any_agents:
             return _NO_INDICES
         return self.pairs(matrix).of(lamp_index)
 
@@ -238,8 +240,8 @@ class SensedDetector:
         lamps_lit = s.lamps_lit()
         detections: list[Detection] = []
         seen = has_beams = False
-        if s.agents:  # else an empty street: no candidate, no beam
-            pairs = s.step_pairs()
+        if s.any_agents:  # else an empty street: no candidate, no beam
+            pairs = s._step_pairs or s.step_pairs()
             seen = pairs.counts[i] > 0
             if seen:
                 detections = self._candidates(k, is_young(learning_rate), lamps_lit)

@@ -30,3 +30,27 @@ def test_a_fit_that_does_not_converge_raises_as_lstsq_does():
         np.linalg.lstsq(np.array([[np.nan, 1.0], [1.0, 1.0], [2.0, 1.0]]), np.ones(3))
     with pytest.raises(np.linalg.LinAlgError):
         located._lstsq_solution(np.array([[np.nan, 1.0], [1.0, 1.0], [2.0, 1.0]]), np.ones((3, 1)), 1e-15)
+
+
+def test_the_zones_found_by_bisection_are_those_the_scan_finds():
+    from pathlib import Path
+
+    from citysim.config.scenario import ControllerSpec, load_scenario
+    from citysim.sim.loop import build_controller
+    from citysim.sim.night import build_night
+
+    scenario = load_scenario(Path(__file__).resolve().parents[3] / "scenarios" / "suburban_night.yaml")
+    controller = build_controller(build_night(scenario), ControllerSpec(name="detector_located"))
+    assert controller.zones_in_order
+    bounds = sorted({b for pair in controller.zone_bounds_m for b in pair})
+    rng = np.random.default_rng(3)
+    xs = [*bounds, *(b + d for b in bounds for d in (-3.0, 3.0, -1e-9, 1e-9)), *rng.uniform(-50, 450, 500).tolist(),
+          float("nan"), float("inf"), -float("inf")]  # fmt: skip
+    speeds = [None, 0.0, 0.2, -0.2, 1.4, -1.4, 13.9, -13.9, 40.0, float("nan")]
+    for x_m in xs:
+        for vx_mps in speeds:
+            for cls in ("pedestrian", "vehicle"):
+                controller.zones_in_order = True
+                fast = controller.zones_for(x_m, vx_mps, cls)
+                controller.zones_in_order = False
+                assert fast == controller.zones_for(x_m, vx_mps, cls)
