@@ -40,6 +40,7 @@ class CameraRays:
         self.distortion = camera.distortion
         self.has_distortion = camera.has_distortion
         self.rotation = camera.rotation_world_to_cam
+        self.rotation_t = self.rotation.T  # the view world_to_cam multiplies by (the same strides: the same product)
         self.position_m = camera.position_m
         self.px_m, self.py_m = (float(v) for v in camera.position_m[:2])
         self.height_m = camera.height_m
@@ -58,11 +59,12 @@ class CameraRays:
         return xy
 
     def _ground_xy_m(self, u_px: float, v_px: float) -> tuple[float, float] | None:
-        uv = np.array([[u_px, v_px]], dtype=np.float64)
-        if self.has_distortion:
-            uv = cv2.undistortPointsIter(uv.reshape(-1, 1, 2), self.intrinsic, self.distortion, self._eye,
-                                         self.intrinsic, _UNDISTORT_CRITERIA).reshape(-1, 2)  # fmt: skip
-        u, v = uv[0].tolist()
+        if self.has_distortion:  # the (1, 1, 2) array undistort_pixels reshapes its (1, 2) one to
+            uv = cv2.undistortPointsIter(np.array([[[u_px, v_px]]], dtype=np.float64), self.intrinsic,
+                                         self.distortion, self._eye, self.intrinsic, _UNDISTORT_CRITERIA)  # fmt: skip
+            u, v = uv.ravel().tolist()
+        else:
+            u, v = float(u_px), float(v_px)
         rays_cam = np.array([[(u - self.cx_px) / self.fx_px, (v - self.cy_px) / self.fy_px, 1.0]])
         dx, dy, dz = (rays_cam @ self.rotation)[0].tolist()  # the (1, 3) @ (3, 3) product pixel_to_ground makes
         if not dz < -1e-12:
@@ -73,11 +75,13 @@ class CameraRays:
 
     def project_px(self, points_m: np.ndarray) -> list[list[float]]:
         """``project`` (distorted) of (N, 3) world points, as lists [u, v] (NaN: behind the camera)."""
-        cam = (points_m - self.position_m) @ self.rotation.T  # world_to_cam's product, the same shapes
-        front = cam[:, 2] > 0.01
-        if self.has_distortion and front.all():  # all in front (most boxes): every point, as they are
+        cam = (points_m - self.position_m) @ self.rotation_t  # world_to_cam's product, the same shapes
+        # all in front (most boxes): every point, as they are; the depths compared as plain floats,
+        # the comparison numpy's ``cam[:, 2] > 0.01`` makes (a tenth of the cost on a box's points)
+        if self.has_distortion and all(z > 0.01 for z in cam[:, 2].tolist()):
             px, _ = cv2.projectPoints(cam, _NO_ROTATION, _NO_ROTATION, self.intrinsic, self.distortion)
             return px.reshape(-1, 2).tolist()
+        front = cam[:, 2] > 0.01
         out = np.full((len(cam), 2), np.nan)
         if not front.any():
             return out.tolist()

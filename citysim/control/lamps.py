@@ -303,8 +303,9 @@ class LampStates:
             self._reached_changes = Lamp.target_changes
 
     def any_ramping(self, t_s: float) -> bool:
-        """Whether any lamp ``is_ramping(t_s)``."""
-        self._update_reached()
+        """Whether any lamp ``is_ramping(t_s)`` (asked per judged camera frame: no call while no target changed)."""
+        if self._reached_changes != Lamp.target_changes:
+            self._update_reached()
         return t_s < self._last_reached_s
 
     def ramping(self, t_s: float) -> Sequence[bool]:

@@ -35,12 +35,14 @@ stays for detections without a track.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.linalg import _umath_linalg
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
@@ -116,8 +118,8 @@ class LocatedTrack:
             return
         recent = self.recent(t_s - VELOCITY_WINDOW_S)
         if len(recent) >= 3 and recent[-1][0] - recent[0][0] >= 0.3:
-            ts, xs = np.array(recent).T
-            self.vx_mps = line_slope(ts - ts[0], xs)
+            t0_s = recent[0][0]  # times from the first: the IEEE subtraction ts - ts[0] made elementwise
+            self.vx_mps = line_slope([t_s - t0_s for t_s, _ in recent], [x_m for _, x_m in recent])
 
     def recent(self, since_s: float) -> list[tuple[float, float]]:
         """The positions seen at ``since_s`` or later, oldest first: a tail of ``seen``, whose times
@@ -135,24 +137,58 @@ class LocatedTrack:
         return x_last + (self.heading_vx_mps or 0.0) * (t_s - t_last)
 
 
-def line_slope(x: np.ndarray, y: np.ndarray) -> float:
-    """The slope of ``np.polyfit(x, y, 1)`` (x, y: 1-d float64), by its steps for a line without
-    the wrappers' checks (~20k fits an hour at 22:00; they were two thirds of the cost): the same
-    arrays through the same numpy operations (the Vandermonde matrix [x, 1], scaled by its
-    columns' norms; ``np.linalg.lstsq`` with polyfit's rcond), so the slope is polyfit's bit for
-    bit (the tests compare them). Polyfit's warning for a rank-deficient fit is left out: the
-    times here span 0.3 s or more."""
-    x, y = x + 0.0, y + 0.0
-    lhs = np.empty((len(x), 2))  # np.vander(x, 2): x, then ones
+def line_slope(x: Sequence[float], y: Sequence[float]) -> float:
+    """The slope of ``np.polyfit(x, y, 1)`` (x, y: 1-d float64 arrays, or lists of floats), by its
+    steps for a line without the wrappers' checks (~20k fits an hour at 22:00; they were two thirds
+    of the cost): the same arrays through the same numpy operations (x + 0.0 and y + 0.0; the
+    Vandermonde matrix [x, 1], scaled by its columns' norms; the least-squares solver
+    ``np.linalg.lstsq`` calls, with polyfit's rcond, under lstsq's error state), so the slope is
+    polyfit's bit for bit (the tests compare them). Polyfit's warning for a rank-deficient fit is
+    left out: the times here span 0.3 s or more."""
+    n = len(x)
+    lhs = np.empty((n, 2))  # np.vander(x + 0.0, 2): x, then ones
     lhs[:, 0] = x
+    lhs[:, 0] += 0.0  # polyfit's asarray(x) + 0.0 (a -0.0 becomes 0.0)
     lhs[:, 1] = 1.0
-    scale = np.sqrt((lhs * lhs).sum(axis=0))
+    rhs = np.empty((n, 1))  # lstsq's b[:, newaxis] of y + 0.0
+    rhs[:, 0] = y
+    rhs += 0.0
+    scale = np.sqrt(np.add.reduce(lhs * lhs, axis=0))  # what (lhs * lhs).sum(axis=0) calls
     lhs /= scale
-    c = np.linalg.lstsq(lhs, y, len(x) * _EPS)[0]
-    return float(c[0] / scale[0])
+    c = _lstsq_solution(lhs, rhs, n * _EPS)
+    return float(c[0, 0] / scale[0])
 
 
 _EPS = float(np.finfo(np.float64).eps)
+
+
+def _raise_linalgerror_lstsq(err, flag):
+    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+
+
+_LSTSQ_ERRORS = {"call": _raise_linalgerror_lstsq, "invalid": "call", "over": "ignore", "divide": "ignore",
+                 "under": "ignore"}  # fmt: skip
+
+try:  # numpy's error state as np.errstate sets it, made once (np.errstate makes it per call: ~4 us a fit)
+    from numpy._core.umath import _extobj_contextvar, _make_extobj
+
+    _LSTSQ_EXTOBJ = _make_extobj(**_LSTSQ_ERRORS)
+
+    def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
+        """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` for float64 (m, 2) and (m, 1) arrays, m >= 2: its
+        solver with its signature under its error state (an SVD that does not converge raises)."""
+        token = _extobj_contextvar.set(_LSTSQ_EXTOBJ)
+        try:
+            return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
+        finally:
+            _extobj_contextvar.reset(token)
+
+except ImportError:  # another numpy: its public np.errstate, made per call
+
+    @np.errstate(**_LSTSQ_ERRORS)
+    def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
+        """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` (see above)."""
+        return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
 
 
 def blind_end_lamps(street: Street) -> list[int]:
@@ -186,6 +222,10 @@ class DetectorLocated(DetectorPerFrame):
         self.zone_start_m = np.array([s.zone_start_m for s in ctx.street.lamps])
         self.zone_end_m = np.array([s.zone_end_m for s in ctx.street.lamps])
         self.zone_bounds_m = list(zip(self.zone_start_m.tolist(), self.zone_end_m.tolist(), strict=True))
+        self.zone_starts_m, self.zone_ends_m = self.zone_start_m.tolist(), self.zone_end_m.tolist()
+        # zones in order along the street (starts and ends ascending): the zones a stretch meets are a run
+        self.zones_in_order = self.zone_starts_m == sorted(self.zone_starts_m) and self.zone_ends_m == sorted(
+            self.zone_ends_m)  # fmt: skip
         net, lum = ctx.network.spec, ctx.luminaire
         # dim -> full, the radio's worst usual delay, one frame: the lead every class needs
         self.base_lead_s = ((1.0 - lum.dim_level) * lum.ramp_up_s + (net.latency_ms + 3.0 * net.jitter_ms) / 1000.0
@@ -206,6 +246,7 @@ class DetectorLocated(DetectorPerFrame):
                        + LANE_SLACK_M, lane.direction) for lane in ctx.street.lanes]  # fmt: skip
         self.blind_end_lamps = blind_end_lamps(ctx.street) if ctx.spec.light_blind_ends in (None, True) else []
         self.next_blind_end_s = 0.0
+        self.camera_lamps = ctx.camera_lamps  # read per placement (the context's property makes the tuple anew)
 
     def lead_s(self, cls: str) -> float:
         return self.base_lead_s + CLASS_MARGIN_S.get(cls, 1.0)
@@ -227,6 +268,8 @@ class DetectorLocated(DetectorPerFrame):
             ahead_m = vx_mps * self.lead_s(cls)
             lo_m, hi_m = min(x_m, x_m + ahead_m), max(x_m, x_m + ahead_m)
         # plain floats, compared as numpy compared them: a lamp's zone per ~100k placements an hour
+        if self.zones_in_order:  # the run of zones ending after lo_m and starting at or before hi_m
+            return list(range(bisect.bisect_right(self.zone_ends_m, lo_m), bisect.bisect_right(self.zone_starts_m, hi_m)))
         return [j for j, (start_m, end_m) in enumerate(self.zone_bounds_m) if start_m <= hi_m and end_m > lo_m]
 
     def light_zones(self, camera_lamp: int, t_s: float, zones: Sequence[int]) -> None:
@@ -243,8 +286,12 @@ class DetectorLocated(DetectorPerFrame):
 
     def on_frame(self, camera_index, t_s, image):
         detections = self.detect(camera_index, t_s, image)
-        if detections is not None:
+        if detections:
             self.place(camera_index, t_s, detections)
+        elif detections is not None:  # most judged frames: the windows age (when they hold any), nothing is placed
+            window = self.windows[camera_index]
+            if window.bits or window.seen:  # else ``update({})`` changes nothing
+                window.update({})
         return detections
 
     def place(self, camera_index: int, t_s: float, detections) -> None:
@@ -283,7 +330,7 @@ class DetectorLocated(DetectorPerFrame):
                 continue  # nothing on the street moves like that: an insect at the lens, a flicker
             track.prior_vx_mps = self.lane_prior_mps(cls, ground_y_m)
             zones = self.zones_for(ground_x_m, track.heading_vx_mps, track.cls)
-            self.light_zones(self.ctx.camera_lamps[camera_index], t_s, zones)
+            self.light_zones(self.camera_lamps[camera_index], t_s, zones)
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)
@@ -296,18 +343,18 @@ class DetectorLocated(DetectorPerFrame):
         self.next_extrapolation_s = t_s + 0.25
         stale_after_s = 2.0 * self.ctx.frame_period_s
         for key, track in list(self.tracks.items()):
-            t_last, _ = track.last
-            gone_s = t_s - t_last
+            gone_s = t_s - track.seen[-1][0]
+            if gone_s <= stale_after_s:
+                continue  # seen within two frames: neither forgotten nor extrapolated (the checks below)
             vx_mps = track.heading_vx_mps
             travelled_m = abs(vx_mps or 0.0) * gone_s
             if (gone_s > EXTRAPOLATE_S.get(track.cls, 20.0) or travelled_m > EXTRAPOLATE_M.get(track.cls, 20.0)
                     or vx_mps is None):
-                if gone_s > stale_after_s:
-                    del self.tracks[key]
+                del self.tracks[key]
                 continue
-            if gone_s <= stale_after_s or abs(vx_mps) > IMPLAUSIBLE_MPS:
+            if abs(vx_mps) > IMPLAUSIBLE_MPS:
                 continue
-            self.light_zones(self.ctx.camera_lamps[key[0]], t_s,
+            self.light_zones(self.camera_lamps[key[0]], t_s,
                              self.zones_for(track.predicted_x_m(t_s), vx_mps, track.cls))
 
     def on_message(self, lamp_index, t_s, message):

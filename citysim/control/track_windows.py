@@ -73,10 +73,12 @@ def fragment_keys(detections, window: TrackWindows) -> list:
     standing within ``FRAGMENT_M`` of an established plausible track's detection on the ground,
     the nearest such track's id (a fragment counts for the road user it belongs to)."""
     keys = [d.track_id for d in detections]
+    if not window.min_seen:  # every track is seen enough: none is a fragment (fast mode's windows)
+        return keys
     anchors = [(d.ground_x_m, d.ground_y_m, d.track_id) for d in detections
                if d.track_id is not None and d.ground_x_m is not None and window.seen_enough(d.track_id)
                and d.track_reason not in NOT_A_ROAD_USER]  # fmt: skip
-    if not anchors or not window.min_seen:
+    if not anchors:
         return keys
     for i, d in enumerate(detections):
         if d.track_id is None or d.ground_x_m is None or window.seen_enough(d.track_id):

@@ -34,6 +34,17 @@ class SensedTracker:
         if len(self.history) > 256:  # forget tracks long gone
             self.history = {t: v for t, v in self.history.items() if frame_k - v[0] <= self.max_missed + 1}
 
+    def update_all(self, frame_k: int, track_ids: list[int], hits: list[bool]) -> None:
+        """``update(frame_k, track_id, hit)`` of each pair in turn, in one call (a frame's candidates)."""
+        history, mask, gap = self.history, self.mask, self.max_missed + 1
+        for track_id, hit in zip(track_ids, hits, strict=True):
+            last_k, bits = history.get(track_id, (None, 0))
+            if last_k is None or frame_k - last_k > gap:
+                bits = 0
+            history[track_id] = (frame_k, ((bits << 1) | bool(hit)) & mask)
+            if len(history) > 256:  # forget tracks long gone
+                history = self.history = {t: v for t, v in history.items() if frame_k - v[0] <= gap}
+
     def is_confirmed(self, track_id: int) -> bool:
         entry = self.history.get(track_id)
         return entry is not None and entry[1].bit_count() >= self.k

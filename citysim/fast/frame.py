@@ -20,7 +20,7 @@ class SensedTruth:
     __slots__ = ("object_id", "cls", "fully_visible", "_sensors", "_agents", "_lamp_index", "_agent_index", "_box")
 
     def __init__(self, sensors, lamp_index: int, agent_index: int, fully_visible: bool):
-        agent = sensors.agents[agent_index]
+        agent = sensors.step_agents[agent_index]  # its id and class (the step's snapshots not made)
         self.object_id: int = agent.object_id
         self.cls: str = agent.cls
         self.fully_visible = fully_visible
@@ -38,19 +38,19 @@ class SensedTruth:
 
     @property
     def x(self) -> int:
-        return self.box_px[0]
+        return (self._box or self.box_px)[0]  # the box once projected, without a second property call
 
     @property
     def y(self) -> int:
-        return self.box_px[1]
+        return (self._box or self.box_px)[1]  # the box once projected, without a second property call
 
     @property
     def w(self) -> int:
-        return self.box_px[2]
+        return (self._box or self.box_px)[2]  # the box once projected, without a second property call
 
     @property
     def h(self) -> int:
-        return self.box_px[3]
+        return (self._box or self.box_px)[3]  # the box once projected, without a second property call
 
 
 class SensedFrame:
@@ -68,12 +68,12 @@ class SensedFrame:
     def truth(self) -> tuple:
         if self._truth is None:
             s, i = self.sensors, self.lamp_index
-            if not s.agents or not s.step_pairs().counts[i]:  # no candidate in view
+            if not s.any_agents or not s.step_pairs().counts[i]:  # no candidate in view
                 self._truth = ()
             else:  # the camera's candidates and their forward distances, from the step's lists
                 pairs = s.step_pairs()
                 first, end = pairs.bounds(i)
                 agents, forward_m = pairs.agents[first:end], pairs.forward_m[first:end]
-                self._truth = tuple(SensedTruth(s, i, j, f_m <= DETECTOR_RANGE_M)
-                                    for j, f_m in zip(agents, forward_m, strict=True))  # fmt: skip
+                self._truth = tuple([SensedTruth(s, i, j, f_m <= DETECTOR_RANGE_M)
+                                     for j, f_m in zip(agents, forward_m, strict=True)])  # fmt: skip
         return self._truth

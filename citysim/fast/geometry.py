@@ -159,7 +159,8 @@ class CameraGeometry:
 
     def boxes_px(self, lamp_index: int, agents: Sequence[AgentState]) -> list[tuple[int, int, int, int]]:
         """``box_px`` of each of ``agents`` in camera ``lamp_index``, their points projected in one call."""
-        pts = np.array([p for a in agents for p in ((a.x_m, a.y_m, 0.0), (a.x_m, a.y_m, a.height_m))],
+        # per agent its footprint centre and the point above it at its height, (2 N, 3)
+        pts = np.array([v for a in agents for v in (a.x_m, a.y_m, 0.0, a.x_m, a.y_m, a.height_m)],
                        dtype=np.float64).reshape(-1, 3)  # fmt: skip
         uv = self.rays[lamp_index].project_px(pts)  # the camera's ``project``, its per-call cost left out
         boxes = []

@@ -84,16 +84,22 @@ class StepPairs:
             self.counts, self.starts = [0] * n_cameras, [0] * (n_cameras + 1)
             return
         cameras = chunk.cameras
-        # stable: within a camera the rows (agents) stay ascending, as np.nonzero(seen.T) gave them
-        order = sorted(range(lo, hi), key=cameras.__getitem__)
-        self.agents = [chunk.rows[q] - first for q in order]
-        self.forward_m = [chunk.forward_m[q] for q in order]
-        self.kind = [chunk.kind[q] for q in order]
-        self.lamp = [chunk.lamp[q] for q in order]
-        self.cell = [chunk.cell[q] for q in order]
+        step_cameras = cameras[lo:hi]
+        if step_cameras == sorted(step_cameras):  # most steps: already camera by camera, the lists' slices
+            self.agents = [row - first for row in chunk.rows[lo:hi]]
+            self.forward_m, self.kind = chunk.forward_m[lo:hi], chunk.kind[lo:hi]
+            self.lamp, self.cell = chunk.lamp[lo:hi], chunk.cell[lo:hi]
+        else:
+            # stable: within a camera the rows (agents) stay ascending, as np.nonzero(seen.T) gave them
+            order = sorted(range(lo, hi), key=cameras.__getitem__)
+            self.agents = [chunk.rows[q] - first for q in order]
+            self.forward_m = [chunk.forward_m[q] for q in order]
+            self.kind = [chunk.kind[q] for q in order]
+            self.lamp = [chunk.lamp[q] for q in order]
+            self.cell = [chunk.cell[q] for q in order]
         self.counts = [0] * n_cameras  # pairs per camera
-        for q in order:
-            self.counts[cameras[q]] += 1
+        for camera in step_cameras:
+            self.counts[camera] += 1
         self.starts = [0, *accumulate(self.counts)]
 
     def count(self, camera: int) -> int:

@@ -36,6 +36,7 @@ from citysim.fast.model import (
 )
 from citysim.fast.pairs import CandidatePairs, StepPairs
 from citysim.fast.records import is_young
+from citysim.fast.step_agents import StepAgents
 from citysim.fast.steps import StepGeometries
 from detector.detector import Detection
 from detector.segment import SegmenterParams
@@ -68,6 +69,9 @@ class FastSensors:
         self.ahead_samples = {k: np.asarray(v, dtype=np.float64) for k, v in model.hit_ahead_m.items() if v}
         self.frame_k = -1
         self.agents: list = []
+        self.any_agents = False  # bool(agents), kept: a replayed step's sequence answers it by a call
+        #: ``agents[j]`` as sensing reads them, without a replayed step's snapshots made (``citysim.fast.step_agents``)
+        self.step_agents = StepAgents(self.agents)
         self.levels = np.zeros(self.geometry.n)
         #: when the lamps' levels last changed: only the threshold baselines' segmenters read it, so
         #: it is kept (every observed frame) only once one of them is made
@@ -99,6 +103,8 @@ class FastSensors:
             if agents or self.agents:
                 self.step = self.steps.of(agents, rows)
             self.agents = agents
+            self.any_agents = bool(agents)
+            self.step_agents = StepAgents(agents)
             self._boxes = {}
             self._pairs = {}
             self._step_pairs = None
@@ -117,7 +123,7 @@ class FastSensors:
     def awake_cameras(self) -> list[bool]:
         """``cand.awake`` as a list, made once per step: the sense loop reads it per camera per frame."""
         if self._awake is None:
-            self._awake = self.step.awake() if self.agents else [False] * self.geometry.n
+            self._awake = self.step.awake() if self.any_agents else [False] * self.geometry.n
         return self._awake
 
     def candidates_of(self, lamp_index: int) -> np.ndarray:
@@ -126,13 +132,13 @@ class FastSensors:
 
     def beams_of(self, lamp_index: int) -> np.ndarray:
         """Indices of camera ``lamp_index``'s beam candidates this frame (``citysim.fast.geometry``)."""
-        if not self.agents or not self.step_pairs().beams:  # most steps: no beam in any camera's view
+        if not self.any_agents or not self.step_pairs().beams:  # most steps: no beam in any camera's view
             return _NO_INDICES
         return self._indices_seen("beam_seen", lamp_index)
 
     def _indices_seen(self, matrix: str, lamp_index: int) -> np.ndarray:
         """The candidates ``cand.<matrix>`` marks for camera ``lamp_index`` (ascending)."""
-        if not self.agents:
+        if not self.any_agents:
             return _NO_INDICES
         return self.pairs(matrix).of(lamp_index)
 
@@ -161,7 +167,7 @@ class FastSensors:
             idx = pairs.agents[first:end]
             if agent_index not in idx:
                 idx = [agent_index]
-            for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.agents[j] for j in idx]), strict=True):
+            for j, box in zip(idx, self.geometry.boxes_px(lamp_index, [self.step_agents[j] for j in idx]), strict=True):
                 self._boxes[(lamp_index, j)] = box
         return self._boxes[key]
 
@@ -214,16 +220,14 @@ class SensedDetector:
         self.tracker = SensedTracker()
         self.rng = sensors.rngs[lamp_index]
         self.last_regions: tuple = ()
+        #: ``Detector.motion_in_band``: a drawn frame's regions are all within range, so whether it
+        #: has any (a plain attribute: the sense loop reads every camera's every frame)
+        self.motion_in_band = False
         self.previous: dict[int, tuple[int, bool]] = {}  # object id -> (frame, hit)
         self.fa_left = 0
         self.fa_may_start = bool(sensors.model.fa_reports)  # else ``_false_alarm`` draws nothing, reports nothing
         self.fa_report: tuple | None = None
         self.fa_track = 0
-
-    @property
-    def motion_in_band(self) -> bool:
-        """``Detector.motion_in_band``: a drawn frame's regions are all within range."""
-        return bool(self.last_regions)
 
     def reset_background(self) -> None:
         self.segmenter.reset()
@@ -234,20 +238,27 @@ class SensedDetector:
     def process(self, frame: SensedFrame, learning_rate: float | None = None) -> list[Detection]:
         s, i, k = self.sensors, self.lamp_index, self.sensors.frame_k
         lamps_lit = s.lamps_lit()
-        pairs = s.step_pairs() if s.agents else None  # None: an empty street
-        seen = pairs is not None and pairs.counts[i] > 0
-        detections = self._candidates(k, is_young(learning_rate), lamps_lit) if seen else []
-        beams = s.beams_of(i) if pairs is not None and pairs.beams else _NO_INDICES
-        if len(beams):
-            detections += self._beams(beams, k, is_young(learning_rate))
+        detections: list[Detection] = []
+        seen = has_beams = False
+        if s.any_agents:  # else an empty street: no candidate, no beam
+            pairs = s._step_pairs or s.step_pairs()
+            seen = pairs.counts[i] > 0
+            if seen:
+                detections = self._candidates(k, is_young(learning_rate), lamps_lit)
+            if pairs.beams:  # most steps: no beam in any camera's view
+                beams = s.beams_of(i)
+                has_beams = len(beams) > 0
+                if has_beams:
+                    detections += self._beams(beams, k, is_young(learning_rate))
         lit = lamps_lit[i]
         if self.fa_left == 0 and self.fa_may_start and self.rng.random() < s.model.fa_start_p[lit]:
             self._start_false_alarm()
         fa = self._false_alarm(k) if self.fa_left else None
         if fa is not None:
             detections.append(fa)
-        busy = seen or len(beams) > 0 or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
+        busy = seen or has_beams or fa is not None or self.rng.random() < s.model.p_regions_idle[lit]
         self.last_regions = (True,) if busy else ()
+        self.motion_in_band = bool(busy)
         return detections
 
     def _candidates(self, k: int, young: bool, lamps_lit: list[int]) -> list[Detection]:
@@ -257,13 +268,16 @@ class SensedDetector:
         pairs = s.step_pairs()
         first, end = pairs.bounds(i)
         idx = pairs.agents[first:end]
-        agents = [s.agents[j] for j in idx]
-        fwd = pairs.forward_m[first:end]
+        step_agents, persistence = s.step_agents, s.persistence_list
+        agents = [step_agents[j] for j in idx]
         p = pairs.p_hit(i, s.p_hit_flat, lamps_lit, young)
-        rho = [s.persistence_list[kind] for kind in pairs.kind[first:end]]
+        rho = [persistence[kind] for kind in pairs.kind[first:end]]
         hits = self._chain_draws([a.object_id for a in agents], p, rho, k)
-        out = [self._hit_detection(a, idx[n], fwd[n], self._drawn_class(a.cls))
-               for n, a in enumerate(agents) if hits[n]]  # fmt: skip
+        out = []
+        if True in hits:  # most frames with someone in view: no hit
+            fwd = pairs.forward_m
+            out = [self._hit_detection(a, idx[n], fwd[first + n], self._drawn_class(a.cls))
+                   for n, a in enumerate(agents) if hits[n]]  # fmt: skip
         if len(self.previous) > 512:
             self.previous = {o: v for o, v in self.previous.items() if k - v[0] <= 1}
         return out
@@ -273,16 +287,17 @@ class SensedDetector:
         with the cell's P and its kind's persistence ``rho``, stepped from the last frame's draw;
         every draw is kept for the next frame and told to the k-of-n tracker. Plain floats: the
         same IEEE operations numpy's float64 did, a tenth of the cost on a frame's few candidates."""
-        previous = self.previous
+        previous, k_before = self.previous, k - 1
         for n, key in enumerate(keys):
             prev = previous.get(key)
-            if prev is not None and prev[0] == k - 1:  # the chain's step from the last frame's draw
+            if prev is not None and prev[0] == k_before:  # the chain's step from the last frame's draw
                 p[n] = p[n] + rho[n] * (1.0 - p[n]) if prev[1] else p[n] * (1.0 - rho[n])
-        hits = [draw < p_hit for draw, p_hit in zip(self.rng.random(len(keys)).tolist(), p, strict=True)]
-        update = self.tracker.update
-        for key, hit in zip(keys, hits, strict=True):
+        hits = []
+        for key, draw, p_hit in zip(keys, self.rng.random(len(keys)).tolist(), p, strict=True):
+            hit = draw < p_hit
             previous[key] = (k, hit)
-            update(k, key, hit)
+            hits.append(hit)
+        self.tracker.update_all(k, keys, hits)
         return hits
 
     def _drawn_class(self, kind: str) -> str:
@@ -306,7 +321,7 @@ class SensedDetector:
         """Draws for the beams of road users out of view (kind ``BEAM``, each its own chain and
         track), reported where the light is: the patch at the beam's middle."""
         s, i, kind = self.sensors, self.lamp_index, KINDS.index(BEAM)
-        agents = [s.agents[j] for j in idx.tolist()]
+        agents = [s.step_agents[j] for j in idx.tolist()]
         fwd = s.cand.beam_forward_m[idx, i]
         light = s.geometry.light_at(np.array([beam_x_m(a) for a in agents]), s.levels)
         cells = cell_of(np.full(len(agents), kind), fwd, s.cand.beam_bearing_rad[idx, i], light,
@@ -364,7 +379,7 @@ class SensedSegmenter(_LearningRate):
         s, i = self.sensors, self.lamp_index
         idx, beams = s.candidates_of(i), s.beams_of(i)
         if len(idx) or len(beams):
-            kind, forward_m = nearest_in_view(np.array([KINDS.index(s.agents[j].cls) for j in idx.tolist()]),
+            kind, forward_m = nearest_in_view(np.array([KINDS.index(s.step_agents[j].cls) for j in idx.tolist()]),
                                               s.cand.forward_m[idx, i], s.cand.beam_forward_m[beams, i])
         else:  # nothing in view: what nearest_in_view says of no candidate and no beam
             kind, forward_m = -1, math.nan

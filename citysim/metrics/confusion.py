@@ -31,6 +31,22 @@ def scored_as(cls: str) -> str:
     return kind.detector_class if kind is not None else "noise"
 
 
+#: ``scored_as`` of each kind asked so far (asked per truth object per frame; the records are fixed)
+_SCORED_AS: dict[str, str] = {}
+
+
+def _scored_as_all(truth: Sequence[TruthLike]) -> list[str]:
+    """``scored_as`` of each truth object's class, from ``_SCORED_AS``."""
+    out = []
+    for t in truth:
+        cls = t.cls
+        scored = _SCORED_AS.get(cls)
+        if scored is None:
+            scored = _SCORED_AS[cls] = scored_as(cls)
+        out.append(scored)
+    return out
+
+
 class TruthLike(Protocol):
     """What is read of a ``citysim.render.camera.TruthObject``."""
 
@@ -186,40 +202,50 @@ class DetectionConfusion:
     def _add_matched(self, truth: Sequence[TruthLike], detections: Sequence[DetectionLike], lamp_index: int,
                      t_s: float) -> None:  # fmt: skip
         """``add`` of a frame with road users or detections: matched to the truth boxes, each counted."""
-        truth_cls = [scored_as(t.cls) for t in truth]
-        det_cls = [self._index(d.cls, "detections.cls") for d in detections]
-        det_target = [d.p_target >= self.target_threshold for d in detections]
-        pairs: list[tuple[int, int]] = []
-        if truth and detections:  # without both, nothing to match, no IoU to compute
-            pairs = match_boxes([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections],
-                                self.iou_threshold)
+        truth_cls = _scored_as_all(truth)
+        det_cls = [_CLASS_INDEX.get(d.cls) for d in detections]
+        if None in det_cls:  # the error ``_index`` gives
+            det_cls = [self._index(d.cls, "detections.cls") for d in detections]
         self.frames += 1
-        self.regions += len(detections)
-        matched_truth = dict(pairs)
-        matched_dets = {c for _, c in pairs}
-        for r, c in pairs:
-            self._count(truth_cls[r], det_cls[c], det_target[c])
-        for c in range(len(detections)):
-            if c not in matched_dets:
-                self._count("noise", det_cls[c], det_target[c])
+        matched_truth: dict[int, int] = {}
+        det_target: list[bool] = []
+        if detections:
+            det_target = [d.p_target >= self.target_threshold for d in detections]
+            pairs: list[tuple[int, int]] = []
+            if truth:  # without both, nothing to match, no IoU to compute
+                pairs = match_boxes([(t.x, t.y, t.w, t.h) for t in truth], [d.box_px for d in detections],
+                                    self.iou_threshold)
+            self.regions += len(detections)
+            matched_truth = dict(pairs)
+            matched_dets = {c for _, c in pairs}
+            for r, c in pairs:
+                self._count(truth_cls[r], det_cls[c], det_target[c])
+            for c in range(len(detections)):
+                if c not in matched_dets:
+                    self._count("noise", det_cls[c], det_target[c])
         passes = self._passes.setdefault(lamp_index, {})
+        gap_s = self.pass_gap_s
         for r, t in enumerate(truth):
-            if truth_cls[r] == "noise":
+            cls = truth_cls[r]
+            if cls == "noise":
                 continue
             c = matched_truth.get(r)
-            if c is None and t.fully_visible:
-                self._count(truth_cls[r], 0, False)
-            p = passes.get(t.object_id)
-            if p is not None and t_s - p.last_seen_s > self.pass_gap_s:
+            fully_visible = t.fully_visible
+            if c is None and fully_visible:
+                self._count(cls, 0, False)
+            object_id = t.object_id
+            p = passes.get(object_id)
+            if p is not None and t_s - p.last_seen_s > gap_s:
                 self._end_pass(p)  # back in view after a gap: that was one pass, this is another
                 p = None
             if p is None:
-                p = passes[t.object_id] = _Pass(truth_cls[r], t_s)
+                p = passes[object_id] = _Pass(cls, t_s)
                 self._seen_since(lamp_index, t_s)
             p.last_seen_s = t_s
-            p.fully_seen |= bool(t.fully_visible)
+            p.fully_seen |= bool(fully_visible)
             p.detected |= c is not None and det_target[c]
-        self._end_passes(lamp_index, t_s)
+        if passes and t_s - self._earliest_seen_s[lamp_index] > gap_s:  # else ``_end_passes`` ends none
+            self._end_passes(lamp_index, t_s)
 
     def _end_passes(self, lamp_index: int, t_s: float) -> None:
         """End lamp ``lamp_index``'s passes unseen for more than ``pass_gap_s`` at ``t_s``."""
