@@ -42,7 +42,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.linalg import _umath_linalg
 
 from citysim.config.motion import MAX_SPEED_MPS
 from citysim.control.base import ControlContext
@@ -141,8 +140,8 @@ def line_slope(x: Sequence[float], y: Sequence[float]) -> float:
     """The slope of ``np.polyfit(x, y, 1)`` (x, y: 1-d float64 arrays, or lists of floats), by its
     steps for a line without the wrappers' checks (~20k fits an hour at 22:00; they were two thirds
     of the cost): the same arrays through the same numpy operations (x + 0.0 and y + 0.0; the
-    Vandermonde matrix [x, 1], scaled by its columns' norms; the least-squares solver
-    ``np.linalg.lstsq`` calls, with polyfit's rcond, under lstsq's error state), so the slope is
+    Vandermonde matrix [x, 1], scaled by its columns' norms; ``np.linalg.lstsq`` with polyfit's
+    rcond), so the slope is
     polyfit's bit for bit (the tests compare them). Polyfit's warning for a rank-deficient fit is
     left out: the times here span 0.3 s or more."""
     n = len(x)
@@ -155,40 +154,11 @@ def line_slope(x: Sequence[float], y: Sequence[float]) -> float:
     rhs += 0.0
     scale = np.sqrt(np.add.reduce(lhs * lhs, axis=0))  # what (lhs * lhs).sum(axis=0) calls
     lhs /= scale
-    c = _lstsq_solution(lhs, rhs, n * _EPS)
+    c = np.linalg.lstsq(lhs, rhs, n * _EPS)[0]  # public: numpy's private solver moves between versions
     return float(c[0, 0] / scale[0])
 
 
 _EPS = float(np.finfo(np.float64).eps)
-
-
-def _raise_linalgerror_lstsq(err, flag):
-    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
-
-
-_LSTSQ_ERRORS = {"call": _raise_linalgerror_lstsq, "invalid": "call", "over": "ignore", "divide": "ignore",
-                 "under": "ignore"}  # fmt: skip
-
-try:  # numpy's error state as np.errstate sets it, made once (np.errstate makes it per call: ~4 us a fit)
-    from numpy._core.umath import _extobj_contextvar, _make_extobj
-
-    _LSTSQ_EXTOBJ = _make_extobj(**_LSTSQ_ERRORS)
-
-    def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
-        """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` for float64 (m, 2) and (m, 1) arrays, m >= 2: its
-        solver with its signature under its error state (an SVD that does not converge raises)."""
-        token = _extobj_contextvar.set(_LSTSQ_EXTOBJ)
-        try:
-            return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
-        finally:
-            _extobj_contextvar.reset(token)
-
-except ImportError:  # another numpy: its public np.errstate, made per call
-
-    @np.errstate(**_LSTSQ_ERRORS)
-    def _lstsq_solution(lhs: np.ndarray, rhs: np.ndarray, rcond: float) -> np.ndarray:
-        """``np.linalg.lstsq(lhs, rhs, rcond)[0]`` (see above)."""
-        return _umath_linalg.lstsq(lhs, rhs, rcond, signature="ddd->ddid")[0]
 
 
 def blind_end_lamps(street: Street) -> list[int]:

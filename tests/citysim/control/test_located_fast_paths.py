@@ -23,15 +23,6 @@ def test_the_line_slope_of_lists_is_polyfits_of_the_positions_array():
         assert got == float(np.polyfit(ts - ts[0], xs, 1)[0])
 
 
-def test_a_fit_that_does_not_converge_raises_as_lstsq_does():
-    import pytest
-
-    with pytest.raises(np.linalg.LinAlgError):
-        np.linalg.lstsq(np.array([[np.nan, 1.0], [1.0, 1.0], [2.0, 1.0]]), np.ones(3))
-    with pytest.raises(np.linalg.LinAlgError):
-        located._lstsq_solution(np.array([[np.nan, 1.0], [1.0, 1.0], [2.0, 1.0]]), np.ones((3, 1)), 1e-15)
-
-
 def test_the_zones_found_by_bisection_are_those_the_scan_finds():
     from pathlib import Path
 
