@@ -1,7 +1,7 @@
 """`make demo`: suburban_night in fast mode, a full-fidelity check of its start, and its year.
 
-Three ``citysim`` commands, each printing its own table (2 and 3 start with 1 and run behind it at
-the lowest CPU priority, on the time its two workers leave idle: ``experiments.idle_cores``):
+Three ``citysim`` commands, each printing its own table (2 and 3 start with 1: 2 at its priority,
+3 at the lowest, on the CPU time the others leave idle: ``experiments.idle_cores``):
 
 1. ``citysim run --fidelity fast``: ``--controllers`` (``make demo``: ``NIGHT_CONTROLLERS``, the
    bound, the conventional schemes and the camera controller a planner would install; ``make
@@ -29,7 +29,7 @@ from pathlib import Path
 from citysim.cli import main as citysim
 from citysim.sim.loop import RunError, check_controllers
 from experiments.bench.night import WHOLE_NIGHT_S, cpu_s
-from experiments.idle_cores import BehindChain
+from experiments.idle_cores import LOWEST_PRIORITY_NICE, BehindTogether
 
 REPO = Path(__file__).resolve().parents[1]
 SCENARIO = REPO / "scenarios" / "suburban_night.yaml"
@@ -78,7 +78,7 @@ def check_args(p: argparse.ArgumentParser, args) -> None:
             p.error(f"--{bad}")
 
 
-def _step(title: str, argv: list[str], timings: list, behind: BehindChain) -> None:
+def _step(title: str, argv: list[str], timings: list, behind: BehindTogether) -> None:
     print(f"\n=== {title} ===", flush=True)
 
     def own_cpu_s() -> float:  # this process's and its workers', not those of the commands behind it
@@ -93,15 +93,16 @@ def _step(title: str, argv: list[str], timings: list, behind: BehindChain) -> No
         raise SystemExit(code)
 
 
-def start_behind(steps: list[tuple[str, list[str]]]) -> BehindChain:
-    """The ``citysim`` commands of ``steps`` started now, one after another, on the CPU time the
-    night leaves idle (``experiments.idle_cores``)."""
-    return BehindChain([(title, [sys.executable, "-m", "citysim", *argv, "--no-progress"]) for title, argv in steps])
+def start_behind(steps: list[tuple[str, list[str], int]]) -> BehindTogether:
+    """The ``citysim`` commands of ``steps`` ((title, argv, nice level) triples) started now, beside
+    or behind the night (``experiments.idle_cores``)."""
+    return BehindTogether([(title, [sys.executable, "-m", "citysim", *argv, "--no-progress"], nice_level)
+                           for title, argv, nice_level in steps])  # fmt: skip
 
 
-def _print_behind(behind: BehindChain, timings: list) -> None:
+def _print_behind(behind: BehindTogether, timings: list) -> None:
     for done in behind.finished():
-        print(f"\n=== {done.title} (ran behind the night, on the CPU time it left idle) ===")
+        print(f"\n=== {done.title} (ran beside the night) ===")
         print(done.output.rstrip(), flush=True)
         timings.append((done.title, done.wall_s, done.cpu_s))
         print(f"({done.title}: {done.wall_s:.0f} s wall from its start, {done.cpu_s:.0f} CPU-s)", flush=True)
@@ -119,13 +120,16 @@ def main(argv: list[str] | None = None) -> int:
     which = ["--controllers", args.controllers] if args.controllers != "all" else []
     who = "every controller" if args.controllers == "all" else args.controllers
     t0 = time.perf_counter()
-    # the check and the year need nothing of the night: they start now, behind it (see idle_cores)
+    # the check and the year need nothing of the night: they start now, the check at the night's
+    # priority (a serial chain that would otherwise run after the night), the year on the CPU time
+    # the two leave idle (see idle_cores)
     behind = start_behind([
         (f"2. the check: its first {args.check_s:g} s at full fidelity (rendered and detected) beside fast mode",
-         ["validate", scenario, "--seeds", "1", "--duration", f"{args.check_s:g}", "--controllers", CHECK_CONTROLLERS]),
+         ["validate", scenario, "--seeds", "1", "--duration", f"{args.check_s:g}", "--controllers", CHECK_CONTROLLERS],
+         0),
         (f"3. the year: {YEAR_CONTROLLERS}, {args.year_sample_s:g} s samples per traffic level",
          ["year", scenario, "--out", str(out / "year"), "--controllers", YEAR_CONTROLLERS,
-          "--sample-s", f"{args.year_sample_s:g}"]),
+          "--sample-s", f"{args.year_sample_s:g}"], LOWEST_PRIORITY_NICE),
     ])  # fmt: skip
     try:
         _step(f"1. the night in fast mode: {who}, {args.night_s:g} s from 22:00 ({night_h:.2g} h)",
@@ -138,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     for title, wall, cpu in timings:
         print(f"  {wall:5.0f} s wall {cpu:6.0f} CPU-s  {title.split(':')[0]}")
     total_wall, total_cpu = time.perf_counter() - t0, sum(t[2] for t in timings)
-    print(f"  {total_wall:5.0f} s wall {total_cpu:6.0f} CPU-s  in all (2 and 3 ran behind 1)")
+    print(f"  {total_wall:5.0f} s wall {total_cpu:6.0f} CPU-s  in all (2 and 3 ran beside 1)")
     print(f"open in a browser:\n  the night  {out / 'night' / 'report.html'}\n  the year   {out / 'year' / 'report.html'}")
     return 0
 

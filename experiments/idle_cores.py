@@ -1,13 +1,21 @@
-"""Commands run one after another at the lowest CPU priority, behind the work in the foreground.
+"""Commands run beside and behind the work in the foreground, their output kept until it is done.
 
 ``make demo``'s night keeps both cores busy, but not all the time: for its first seconds one worker
-waits for the traffic recorder (compiling the world's kernels), and for its last half minute one
-worker has nothing left while the other finishes the camera controller. The check and the year
-need neither the night's results nor its cores' full attention, so they run behind it at nice 19
-(POSIX ``nice``): the kernel gives them the CPU time the night leaves idle (a nice-19 process gets
-about 1.5 % of a core when it competes with a nice-0 one), and the night is not slowed. Each
-command's output is kept and handed over whole once it has finished, so tables never interleave
-with the foreground's progress bar.
+waits for the traffic recorder (compiling the world's kernels), and for its last seconds one worker
+has nothing left while the other finishes the camera controller. The check and the year need
+nothing of the night, so they start with it:
+
+* the year at nice 19 (POSIX ``nice``, the lowest priority): the kernel gives it only the CPU time
+  the night leaves idle (a nice-19 process gets about 1.5 % of a core when it competes with a
+  nice-0 one), so the night is not slowed;
+* the check at the night's own priority: its ~40 CPU-s are one serial chain (the world's and then
+  the renderer's and detector's kernels compiled, one worker rendering), which behind the night
+  only ran once the night was done, alone on one core. Beside it, it shares both cores from the
+  start: measured on a fresh clone's demo, the check beside and the year behind ended 122 and
+  134 s after the start, both behind 152 and 154 s.
+
+Each command's output is kept and handed over whole once it has finished, so tables never
+interleave with the foreground's progress bar.
 """
 
 from __future__ import annotations
@@ -40,19 +48,22 @@ class Finished:
     cpu_s: float
 
 
-def at_lowest_priority(argv: Sequence[str]) -> list[str]:
-    """``argv`` run through POSIX ``nice`` at the lowest priority (unchanged where there is no ``nice``:
-    then it competes with the foreground as an equal, slower but with the same results)."""
+def at_priority(argv: Sequence[str], nice_level: int = LOWEST_PRIORITY_NICE) -> list[str]:
+    """``argv`` run through POSIX ``nice`` at ``nice_level`` (0: unchanged, the foreground's own
+    priority; unchanged too where there is no ``nice``: then it competes with the foreground as an
+    equal, with the same results)."""
     nice = shutil.which("nice")
-    return [nice, "-n", str(LOWEST_PRIORITY_NICE), *argv] if nice else list(argv)
+    return [nice, "-n", str(nice_level), *argv] if nice and nice_level else list(argv)
 
 
 class BehindChain:
-    """Start ``commands`` ((title, argv) pairs) at once, in a thread, one after another at the lowest
-    priority; ``finished()`` yields each outcome in order as it ends. A command that fails ends the
-    chain (the ones after it do not start). ``stop()`` ends the running command and the chain."""
+    """Start ``commands`` ((title, argv) pairs) at once, in a thread, one after another at
+    ``nice_level`` (the lowest priority by default); ``finished()`` yields each outcome in order as
+    it ends. A command that fails ends the chain (the ones after it do not start). ``stop()`` ends
+    the running command and the chain."""
 
-    def __init__(self, commands: Sequence[tuple[str, Sequence[str]]]):
+    def __init__(self, commands: Sequence[tuple[str, Sequence[str]]], nice_level: int = LOWEST_PRIORITY_NICE):
+        self.nice_level = nice_level
         self._outcomes: queue.Queue[Finished | None] = queue.Queue()
         self._stopped = threading.Event()
         self._lock = threading.Lock()  # a command starts and stop() looks at it one at a time
@@ -79,7 +90,7 @@ class BehindChain:
             with self._lock:
                 if self._stopped.is_set():
                     return None
-                process = subprocess.Popen(at_lowest_priority(argv), stdin=subprocess.DEVNULL, stdout=log,
+                process = subprocess.Popen(at_priority(argv, self.nice_level), stdin=subprocess.DEVNULL, stdout=log,
                                            stderr=subprocess.STDOUT)  # fmt: skip
                 self._running = process
             # wait4, not wait(): the CPU seconds of this command and of the workers it waited for
@@ -106,3 +117,27 @@ class BehindChain:
                 with contextlib.suppress(ProcessLookupError):  # it ended this very moment
                     os.kill(running.pid, signal.SIGTERM)
         self._thread.join(timeout=10)
+
+
+class BehindTogether:
+    """Start ``commands`` ((title, argv, nice_level) triples) at once, each in a chain of its own
+    (``BehindChain``) at its own priority, instead of each waiting for the one before.
+    ``finished()`` yields the outcomes in the order given."""
+
+    def __init__(self, commands: Sequence[tuple[str, Sequence[str], int]]):
+        self._chains = [BehindChain([(title, argv)], nice_level) for title, argv, nice_level in commands]
+
+    @property
+    def reaped_cpu_s(self) -> float:
+        """CPU seconds of the commands ended so far (see ``BehindChain.reaped_cpu_s``)."""
+        return sum(chain.reaped_cpu_s for chain in self._chains)
+
+    def finished(self) -> Iterator[Finished]:
+        """Each command's outcome in the order given, waiting for it to end."""
+        for chain in self._chains:
+            yield from chain.finished()
+
+    def stop(self) -> None:
+        """End every command still running."""
+        for chain in self._chains:
+            chain.stop()

@@ -11,10 +11,10 @@ class _RecordedBehind:
 
     def __init__(self, steps, calls):
         self.steps, self.reaped_cpu_s = steps, 0.0
-        calls.extend(argv for _, argv in steps)
+        calls.extend(argv for _, argv, _ in steps)
 
     def finished(self):
-        return iter([Finished(title, 0, "(output)", 1.0, 1.0) for title, _ in self.steps])
+        return iter([Finished(title, 0, "(output)", 1.0, 1.0) for title, _, _ in self.steps])
 
     def stop(self):
         pass
@@ -38,10 +38,13 @@ def test_bad_demo_options_exit_2_before_any_simulation(argv, option, capsys, mon
 def test_the_demo_runs_the_three_commands_and_says_where_the_reports_are(tmp_path, capsys, monkeypatch):
     calls = []
     monkeypatch.setattr(demo, "citysim", lambda argv: calls.append(argv) or 0)
-    monkeypatch.setattr(demo, "start_behind", lambda steps: _RecordedBehind(steps, calls))
+    started = []
+    monkeypatch.setattr(demo, "start_behind", lambda steps: started.append(steps) or _RecordedBehind(steps, calls))
     assert demo.main(["--out", str(tmp_path)]) == 0
-    # the check and the year are started first, behind the night (the night is the foreground)
+    # the check and the year are started first, beside the night (the night is the foreground):
+    # the check at the night's priority, the year at the lowest
     assert [c[0] for c in calls] == ["validate", "year", "run"]
+    assert [nice for _, _, nice in started[0]] == [0, demo.LOWEST_PRIORITY_NICE]
     calls = [calls[2], calls[0], calls[1]]
     assert calls[0][calls[0].index("--fidelity") + 1] == "fast"
     assert calls[0][calls[0].index("--duration") + 1] == "28800"  # the whole night by default
@@ -67,7 +70,7 @@ def test_all_controllers_runs_the_scenarios_own_list(tmp_path, monkeypatch):
 
 def test_a_failed_night_stops_the_commands_behind_it(tmp_path, monkeypatch):
     stopped = []
-    behind = _RecordedBehind([("2. the check", ["validate"])], [])
+    behind = _RecordedBehind([("2. the check", ["validate"], 0)], [])
     behind.stop = lambda: stopped.append(True)
     monkeypatch.setattr(demo, "citysim", lambda argv: 3)
     monkeypatch.setattr(demo, "start_behind", lambda steps: behind)

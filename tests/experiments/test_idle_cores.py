@@ -3,7 +3,7 @@
 import sys
 import time
 
-from experiments.idle_cores import LOWEST_PRIORITY_NICE, BehindChain, at_lowest_priority
+from experiments.idle_cores import LOWEST_PRIORITY_NICE, BehindChain, BehindTogether, at_priority
 
 PY = sys.executable
 
@@ -15,7 +15,7 @@ def test_commands_run_in_order_at_the_lowest_priority_with_their_output_and_cpu(
     chain.stop()
     assert [o.title for o in outcomes] == ["first", "second"]
     assert all(o.exit_code == 0 for o in outcomes)
-    if at_lowest_priority(["x"])[0] != "x":  # a POSIX nice was found: the command runs at nice 19
+    if at_priority(["x"])[0] != "x":  # a POSIX nice was found: the command runs at nice 19
         assert f"nice {LOWEST_PRIORITY_NICE}" in outcomes[0].output
     assert outcomes[0].cpu_s >= 0.25  # the busy loop's 0.3 CPU-s, measured from the reaped process
     assert outcomes[1].output.split() == ["two", "err"]
@@ -39,3 +39,19 @@ def test_stop_ends_the_running_command_at_once():
     outcomes = list(chain.finished())
     assert time.perf_counter() - t0 < 10
     assert [o.title for o in outcomes] == ["sleeps"] and outcomes[0].exit_code != 0
+
+
+def test_together_the_commands_run_at_once_each_at_its_priority():
+    nice_after_1s = "import os, time; time.sleep(1.0); print('nice', os.nice(0))"
+    together = BehindTogether([("beside", [PY, "-c", nice_after_1s], 0),
+                               ("behind", [PY, "-c", nice_after_1s], LOWEST_PRIORITY_NICE)])  # fmt: skip
+    t0 = time.perf_counter()
+    outcomes = list(together.finished())
+    wall_s = time.perf_counter() - t0
+    together.stop()
+    assert [o.title for o in outcomes] == ["beside", "behind"]
+    assert wall_s < 1.9  # both slept at once, not one after the other (2 s)
+    assert "nice 0" in outcomes[0].output
+    if at_priority(["x"])[0] != "x":
+        assert f"nice {LOWEST_PRIORITY_NICE}" in outcomes[1].output
+    assert together.reaped_cpu_s == sum(o.cpu_s for o in outcomes)
