@@ -68,6 +68,7 @@ import numpy as np
 from detector.camera import MIN_DEPRESSION_RAD, CameraModel
 from detector.classes import TABLE1
 from detector.features import RegionGeometry
+from detector.tracks.reunite import inside_share
 
 _VEHICLE = TABLE1["vehicle"]
 
@@ -172,15 +173,6 @@ class FootprintGeometry:
         stands (a car's middle; an upright walker's feet, as his head's ray meets the roof plane
         near them); None as ``extents_m``."""
         return [None if e is None else ((e[0] + e[1]) / 2, (e[2] + e[3]) / 2) for e in self.extents_m(boxes_px)]
-
-
-def inside_share(box, other) -> float:
-    """Share of ``box``'s area that ``other`` covers (boxes x, y, w, h px)."""
-    x, y, w, h = box
-    ox, oy, ow, oh = other
-    iw = min(x + w, ox + ow) - max(x, ox)
-    ih = min(y + h, oy + oh) - max(y, oy)
-    return iw * ih / max(w * h, 1) if iw > 0 and ih > 0 else 0.0
 
 
 def _gap_m(a, b) -> float:

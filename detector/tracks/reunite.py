@@ -40,7 +40,7 @@ class ReuniteParams:
     velocity_slack_px: float = 0.5
 
 
-def _inside_share(box, other) -> float:
+def inside_share(box, other) -> float:
     """Share of ``box``'s area that ``other`` covers (boxes x, y, w, h px)."""
     x, y, w, h = box
     ox, oy, ow, oh = other
@@ -99,7 +99,7 @@ def fragment_groups(
         if track_of[j] >= 0:
             continue
         for t, i in region_of_track.items():
-            if _inside_share(boxes_px[j], tracks[t].predicted_box()) >= params.min_inside_share:
+            if inside_share(boxes_px[j], tracks[t].predicted_box()) >= params.min_inside_share:
                 parent[root(j)] = root(i)
                 break
     # rule 2: established tracks moving together whose union fits Table 1 at least as well
