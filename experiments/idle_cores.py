@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import queue
 import shutil
 import signal
 import subprocess
@@ -56,59 +55,44 @@ def at_priority(argv: Sequence[str], nice_level: int = LOWEST_PRIORITY_NICE) -> 
     return [nice, "-n", str(nice_level), *argv] if nice and nice_level else list(argv)
 
 
-class BehindChain:
-    """Start ``commands`` ((title, argv) pairs) at once, in a thread, one after another at
-    ``nice_level`` (the lowest priority by default); ``finished()`` yields each outcome in order as
-    it ends. A command that fails ends the chain (the ones after it do not start). ``stop()`` ends
-    the running command and the chain."""
+class BehindCommand:
+    """Start one command (``argv``) now, in a thread, at ``nice_level`` (the lowest priority by
+    default); ``outcome()`` waits for it to end; ``stop()`` ends it (or keeps it from starting)."""
 
-    def __init__(self, commands: Sequence[tuple[str, Sequence[str]]], nice_level: int = LOWEST_PRIORITY_NICE):
-        self.nice_level = nice_level
-        self._outcomes: queue.Queue[Finished | None] = queue.Queue()
+    def __init__(self, title: str, argv: Sequence[str], nice_level: int = LOWEST_PRIORITY_NICE):
+        self.title, self.nice_level = title, nice_level
+        self._outcome: Finished | None = None
         self._stopped = threading.Event()
-        self._lock = threading.Lock()  # a command starts and stop() looks at it one at a time
+        self._lock = threading.Lock()  # the command starts and stop() looks at it one at a time
         self._running: subprocess.Popen | None = None
-        self.reaped_cpu_s = 0.0  # CPU seconds of the commands ended so far: they count in RUSAGE_CHILDREN
-        self._thread = threading.Thread(target=self._run_all, args=(list(commands),), name="behind-chain", daemon=True)
+        self.reaped_cpu_s = 0.0  # CPU seconds of the command once ended: they count in RUSAGE_CHILDREN
+        self._thread = threading.Thread(target=self._run, args=(list(argv),), name=f"behind: {title}", daemon=True)
         self._thread.start()
 
-    def _run_all(self, commands: list[tuple[str, Sequence[str]]]) -> None:
-        try:
-            for title, argv in commands:
-                outcome = self._run_one(title, argv)
-                if outcome is None:  # stopped before it started
-                    break
-                self._outcomes.put(outcome)
-                if outcome.exit_code:
-                    break
-        finally:
-            self._outcomes.put(None)  # the end of the chain, also when a command could not start
-
-    def _run_one(self, title: str, argv: Sequence[str]) -> Finished | None:
+    def _run(self, argv: list[str]) -> None:
         with tempfile.TemporaryFile() as log:
             t0 = time.perf_counter()
             with self._lock:
                 if self._stopped.is_set():
-                    return None
+                    return
                 process = subprocess.Popen(at_priority(argv, self.nice_level), stdin=subprocess.DEVNULL, stdout=log,
                                            stderr=subprocess.STDOUT)  # fmt: skip
                 self._running = process
             # wait4, not wait(): the CPU seconds of this command and of the workers it waited for
             _, status, usage = os.wait4(process.pid, 0)
             process.returncode = exit_code = os.waitstatus_to_exitcode(status)
-            self.reaped_cpu_s += usage.ru_utime + usage.ru_stime
+            self.reaped_cpu_s = cpu_s = usage.ru_utime + usage.ru_stime
             wall_s = time.perf_counter() - t0
             log.seek(0)
-            output = log.read().decode(errors="replace")
-        return Finished(title, exit_code, output, wall_s, usage.ru_utime + usage.ru_stime)
+            self._outcome = Finished(self.title, exit_code, log.read().decode(errors="replace"), wall_s, cpu_s)
 
-    def finished(self) -> Iterator[Finished]:
-        """Each command's outcome in order, waiting for it to end."""
-        while (outcome := self._outcomes.get()) is not None:
-            yield outcome
+    def outcome(self) -> Finished | None:
+        """The command's outcome once it has ended (None: stopped before it started)."""
+        self._thread.join()
+        return self._outcome
 
     def stop(self) -> None:
-        """End the running command (SIGTERM: its worker pools end with it) and start no other."""
+        """End the command if it runs (SIGTERM: its worker pools end with it), or keep it from starting."""
         with self._lock:
             self._stopped.set()
             running = self._running
@@ -120,24 +104,26 @@ class BehindChain:
 
 
 class BehindTogether:
-    """Start ``commands`` ((title, argv, nice_level) triples) at once, each in a chain of its own
-    (``BehindChain``) at its own priority, instead of each waiting for the one before.
-    ``finished()`` yields the outcomes in the order given."""
+    """Start ``commands`` ((title, argv, nice_level) triples) at once, each a ``BehindCommand`` at
+    its own priority, instead of each waiting for the one before. ``finished()`` yields the
+    outcomes in the order given."""
 
     def __init__(self, commands: Sequence[tuple[str, Sequence[str], int]]):
-        self._chains = [BehindChain([(title, argv)], nice_level) for title, argv, nice_level in commands]
+        self._commands = [BehindCommand(title, argv, nice_level) for title, argv, nice_level in commands]
 
     @property
     def reaped_cpu_s(self) -> float:
-        """CPU seconds of the commands ended so far (see ``BehindChain.reaped_cpu_s``)."""
-        return sum(chain.reaped_cpu_s for chain in self._chains)
+        """CPU seconds of the commands ended so far (see ``BehindCommand.reaped_cpu_s``)."""
+        return sum(command.reaped_cpu_s for command in self._commands)
 
     def finished(self) -> Iterator[Finished]:
-        """Each command's outcome in the order given, waiting for it to end."""
-        for chain in self._chains:
-            yield from chain.finished()
+        """Each command's outcome in the order given, waiting for it to end (none for a command
+        stopped before it started)."""
+        for command in self._commands:
+            if (outcome := command.outcome()) is not None:
+                yield outcome
 
     def stop(self) -> None:
         """End every command still running."""
-        for chain in self._chains:
-            chain.stop()
+        for command in self._commands:
+            command.stop()

@@ -7,7 +7,7 @@ from experiments.idle_cores import Finished
 
 
 class _RecordedBehind:
-    """Stands in for the chain of commands behind the night: records them, runs none."""
+    """Stands in for the commands beside the night: records them, runs none."""
 
     def __init__(self, steps, calls):
         self.steps, self.reaped_cpu_s = steps, 0.0

@@ -3,42 +3,41 @@
 import sys
 import time
 
-from experiments.idle_cores import LOWEST_PRIORITY_NICE, BehindChain, BehindTogether, at_priority
+from experiments.idle_cores import LOWEST_PRIORITY_NICE, BehindTogether, at_priority
 
 PY = sys.executable
 
 
 def test_commands_run_in_order_at_the_lowest_priority_with_their_output_and_cpu(tmp_path):
     busy = "import os, time\nt = time.process_time()\nwhile time.process_time() - t < 0.3: pass\nprint('nice', os.nice(0))"
-    chain = BehindChain([("first", [PY, "-c", busy]), ("second", [PY, "-c", "import sys; print('two'); print('err', file=sys.stderr)"])])
-    outcomes = list(chain.finished())
-    chain.stop()
+    together = BehindTogether([("first", [PY, "-c", busy], LOWEST_PRIORITY_NICE),
+                               ("second", [PY, "-c", "import sys; print('two'); print('err', file=sys.stderr)"],
+                                LOWEST_PRIORITY_NICE)])  # fmt: skip
+    outcomes = list(together.finished())
+    together.stop()
     assert [o.title for o in outcomes] == ["first", "second"]
     assert all(o.exit_code == 0 for o in outcomes)
     if at_priority(["x"])[0] != "x":  # a POSIX nice was found: the command runs at nice 19
         assert f"nice {LOWEST_PRIORITY_NICE}" in outcomes[0].output
     assert outcomes[0].cpu_s >= 0.25  # the busy loop's 0.3 CPU-s, measured from the reaped process
     assert outcomes[1].output.split() == ["two", "err"]
-    assert chain.reaped_cpu_s >= outcomes[0].cpu_s
+    assert together.reaped_cpu_s >= outcomes[0].cpu_s
 
 
-def test_a_failing_command_ends_the_chain(tmp_path):
-    marker = tmp_path / "ran"
-    chain = BehindChain([("fails", [PY, "-c", "raise SystemExit(4)"]),
-                         ("after", [PY, "-c", f"open({str(marker)!r}, 'w')"])])  # fmt: skip
-    outcomes = list(chain.finished())
+def test_a_failing_commands_exit_code_is_handed_over():
+    outcomes = list(BehindTogether([("fails", [PY, "-c", "raise SystemExit(4)"], LOWEST_PRIORITY_NICE)]).finished())
     assert [(o.title, o.exit_code) for o in outcomes] == [("fails", 4)]
-    assert not marker.exists()
 
 
-def test_stop_ends_the_running_command_at_once():
-    chain = BehindChain([("sleeps", [PY, "-c", "import time; time.sleep(60)"]), ("never", [PY, "-c", "pass"])])
+def test_stop_ends_the_running_commands_at_once():
+    sleeps = [PY, "-c", "import time; time.sleep(60)"]
+    together = BehindTogether([("sleeps", sleeps, LOWEST_PRIORITY_NICE), ("sleeps too", sleeps, 0)])
     time.sleep(0.5)
     t0 = time.perf_counter()
-    chain.stop()
-    outcomes = list(chain.finished())
+    together.stop()
+    outcomes = list(together.finished())
     assert time.perf_counter() - t0 < 10
-    assert [o.title for o in outcomes] == ["sleeps"] and outcomes[0].exit_code != 0
+    assert [o.title for o in outcomes] == ["sleeps", "sleeps too"] and all(o.exit_code != 0 for o in outcomes)
 
 
 def test_together_the_commands_run_at_once_each_at_its_priority():
