@@ -76,8 +76,25 @@ def _check_writable(out: Path, arg: str) -> None:
 TERMINATED_EXIT = 128 + signal.SIGTERM
 
 
+#: set by the SIGTERM handler: its exception can be lost (below), the flag cannot
+_terminated = threading.Event()
+
+
 def _raise_exit(signum, frame) -> None:
+    _terminated.set()
     raise SystemExit(TERMINATED_EXIT)
+
+
+def raise_if_terminated() -> None:
+    """Raise ``SystemExit(143)`` if SIGTERM arrived within ``exit_on_terminate``.
+
+    The handler's own exception is lost when the signal lands inside a callback from C: Python
+    prints it ("Exception ignored from callback") and goes on (seen: pymunk freeing a body
+    through cffi during the world's step, and the run then finished and wrote its output). So
+    the simulation loops call this once per simulated second, and ``staged_output`` before it
+    moves anything into place."""
+    if _terminated.is_set():
+        raise SystemExit(TERMINATED_EXIT)
 
 
 @contextmanager
@@ -88,6 +105,7 @@ def exit_on_terminate() -> Iterator[None]:
     keeps its own handler."""
     install = threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
     if install:
+        _terminated.clear()
         signal.signal(signal.SIGTERM, _raise_exit)
     try:
         yield
@@ -133,6 +151,7 @@ def staged_output(out_dir: str | Path) -> Iterator[Path]:
     stage = Path(tempfile.mkdtemp(prefix=f"{_stage_prefix(out)}{os.getpid()}-", dir=out.parent))
     try:
         yield stage
+        raise_if_terminated()
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         for folder in made:  # the parents this job created, if still empty

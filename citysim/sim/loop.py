@@ -38,6 +38,7 @@ from citysim.sim.cameras import film
 from citysim.sim.night import Night, build_night
 from citysim.sim.replay import TrafficReplay
 from detector.cliargs import did_you_mean
+from detector.outdir import raise_if_terminated
 
 #: The keys of one controller's summary, in the order summary.json lists them.
 SUMMARY_KEYS = (
@@ -106,6 +107,7 @@ def _run_clock(night: Night, collectors: Sequence[Collector], on_progress: Calla
     while t < t_end - 1e-9:
         t_next = min(t_end, t + 1.0)
         night.run_until(t_next)
+        raise_if_terminated()  # a SIGTERM whose exception a C callback swallowed
         if on_progress is not None:
             on_progress(t_next - t)
         t = t_next

@@ -1,10 +1,19 @@
 """Staging folders of output folders: removed when their job dies, whatever killed it."""
 
 import os
+import signal
 import subprocess
 import sys
 
-from detector.outdir import remove_orphan_stages, staged_output
+import pytest
+
+from detector.outdir import (
+    TERMINATED_EXIT,
+    exit_on_terminate,
+    raise_if_terminated,
+    remove_orphan_stages,
+    staged_output,
+)
 
 
 def dead_pid() -> int:
@@ -38,3 +47,30 @@ def test_removing_orphans_says_which(tmp_path):
     orphan.mkdir()
     assert remove_orphan_stages(out) == [orphan]
     assert remove_orphan_stages(out) == []
+
+
+class _SignalsItselfWhenFreed:
+    """Sends this process SIGTERM from ``__del__``, a callback whose exceptions Python prints and
+    ignores, as it does for one raised in a cffi callback (pymunk freeing a body)."""
+
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGTERM)
+        for _ in range(1000):  # the handler runs between bytecodes, here, inside the callback
+            pass
+
+
+def test_a_sigterm_whose_exception_a_callback_swallowed_still_stops_the_job(tmp_path):
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as stopped, exit_on_terminate():
+        with staged_output(out) as stage:
+            (stage / "summary.json").write_text("{}")
+            _SignalsItselfWhenFreed()  # freed at once: the handler's SystemExit is lost in __del__
+            (stage / "lamps.csv").write_text("went on")  # ... and the job went on
+    assert stopped.value.code == TERMINATED_EXIT
+    assert not out.exists() and not list(tmp_path.iterdir())
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
+def test_raise_if_terminated_is_quiet_without_a_signal():
+    with exit_on_terminate():
+        raise_if_terminated()  # a fresh block forgets an earlier block's signal
