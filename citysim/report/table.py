@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from citysim.world.approaches import describe_short
+
 
 def _pct(value: float | None) -> str:
     return "-" if value is None else f"{100 * value:.1f} %"
@@ -33,4 +35,7 @@ def comparison_table(summary: dict) -> str:
         blind = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in coverage["blind_stretches_m"]) or "none"
         lines.append(f"camera coverage: {100 * coverage['street_seen']:.0f} % of the lanes and sidewalks in the "
                      f"lamp zones is seen whole within 25 m by some camera; blind stretches (x, m): {blind}")
+    short = describe_short(summary.get("approaches") or {})
+    if short:
+        lines.append(short)
     return "\n".join(lines)

@@ -35,6 +35,7 @@ from citysim.sim.calibration import sensor_model_for
 from citysim.sim.loop import check_controllers, check_fidelity, controller_spec, run_controller
 from citysim.sim.replay import record_traffic
 from citysim.sim.workers import spawn_pool
+from citysim.world.approaches import approaches
 from citysim.world.coverage import camera_coverage
 from citysim.world.street import build_street
 from detector.outdir import staged_output
@@ -166,7 +167,8 @@ def run_comparison(
     workers = max(1, min(workers, len(specs)))
     summary = {"scenario": scenario.name, "scenario_file": scenario_file, "seed": scenario.seed,
                "duration_s": scenario.duration_s, "fidelity": fidelity, "lamps": None,
-               "coverage": camera_coverage(build_street(scenario)).as_dict(), "controllers": {}}
+               "coverage": camera_coverage(build_street(scenario)).as_dict(),
+               "approaches": approaches(scenario).as_dict(), "controllers": {}}
     with staged_output(out_dir) if out_dir is not None else _scratch() as stage:
         parts = stage / ".parts"
         traffic = stage / ".traffic" if replay_traffic else None
