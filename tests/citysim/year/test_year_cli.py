@@ -32,6 +32,11 @@ def test_year_writes_annual_figures_plot_and_report(toy_file, tmp_path, capsys):
     report = (out / "report.html").read_text()
     assert "<h2>A year</h2>" in report and "AECI" in report and "Energy per month." in report
     assert "results written to" in printed and str(out / "year.json") in printed and "Wh/m2" in printed
+    # the darkness figures say how many measured entries they rest on: the level runs' per-hour
+    # entries times the measured share of an hour
+    (level,) = result["table"]["levels"].values()
+    entries = round(level["always_on"]["zone_entries"] * result["sample_s"] / 3600)
+    assert f"read from {entries:,} zone entries measured" in printed
 
 
 def _no_year(tmp_path, toy_file):
