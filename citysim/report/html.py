@@ -33,6 +33,7 @@ from citysim.report.common import (
     slug,
     to_float,
 )
+from citysim.world.approaches import describe_short
 
 __all__ = ["best_settings", "write_report"]
 
@@ -157,9 +158,11 @@ def _run_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Path
              + (f" ({html.escape(str(source))})" if source else "")
              + f", seed {summary.get('seed')}, {summary.get('lamps')} lamps.</p>"
              f'<p class="window"><b>What this window is:</b> {html.escape(facts.window_line())}</p>')  # fmt: skip
-    warning = facts.warning()
-    if warning:
-        intro += f'<div class="warning" role="alert">&#9888; {html.escape(warning)}</div>'
+    # the street's ends with no approach (road users appear inside the end zones) change what
+    # lit on entry can be, the oracle's included: said as loudly as the few-objects warning
+    for warning in (facts.warning(), describe_short(summary.get("approaches") or {})):
+        if warning:
+            intro += f'<div class="warning" role="alert">&#9888; {html.escape(warning)}</div>'
     reasons = "".join(f'<p class="reason">{html.escape(r)}</p>'
                       for r in zero_savings_reasons(folder, summary, facts).values())  # fmt: skip
     found = [d for d in (detection_figures(n, f, passages) for n, f in figures.items()) if d]

@@ -171,6 +171,15 @@ def test_few_objects_warning_shows_below_the_threshold(report):
     assert RunFacts("x", 600.0, 22.0, objects=FEW_OBJECTS).warning() is None
 
 
+def test_a_street_end_without_approach_is_a_warning_in_the_report(run_copy):
+    summary = json.loads((run_copy / "summary.json").read_text())
+    for short_ends, shown in [(["end"], True), ([], False)]:
+        summary["approaches"] = {"first_m": 30.0, "last_m": 0.0, "needed_m": 5.1, "short_ends": short_ends}
+        (run_copy / "summary.json").write_text(json.dumps(summary))
+        text = " ".join(" ".join(parse(write_report(run_copy).read_text()).text).split())
+        assert ("the end lamp zones reach the street's end (0 m)" in text) is shown, short_ends
+
+
 def test_few_objects_warning_on_the_plots(run_copy, monkeypatch):
     drawn = []
     save = run_plots.save
