@@ -41,7 +41,8 @@ class Approaches:
 
 def approach_needed_m(scenario: Scenario) -> float:
     """How far the fastest road user (60 km/h) goes while the oracle brings a lamp from dim to full
-    (its lead: the dim-to-full part of ``ramp_up_s`` plus two physics steps), m."""
+    (its lead: the dim-to-full part of ``ramp_up_s`` plus two physics steps, as
+    ``citysim.control.oracle.Oracle.lead_s`` reckons it; the world may not import the controllers), m."""
     lum = scenario.lamps.luminaire
     return MAX_SPEED_MPS * ((1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 / scenario.physics_hz)
 
