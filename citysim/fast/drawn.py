@@ -27,15 +27,12 @@ class SensedTracker:
         self.history: dict[int, tuple[int, int]] = {}  # track -> (last frame, hit bits)
 
     def update(self, frame_k: int, track_id: int, hit: bool) -> None:
-        last_k, bits = self.history.get(track_id, (None, 0))
-        if last_k is None or frame_k - last_k > self.max_missed + 1:
-            bits = 0
-        self.history[track_id] = (frame_k, ((bits << 1) | bool(hit)) & self.mask)
-        if len(self.history) > 256:  # forget tracks long gone
-            self.history = {t: v for t, v in self.history.items() if frame_k - v[0] <= self.max_missed + 1}
+        """Frame ``frame_k``'s draw of one track (a false-alarm episode's)."""
+        self.update_all(frame_k, [track_id], [hit])
 
     def update_all(self, frame_k: int, track_ids: list[int], hits: list[bool]) -> None:
-        """``update(frame_k, track_id, hit)`` of each pair in turn, in one call (a frame's candidates)."""
+        """Frame ``frame_k``'s draws of tracks ``track_ids`` (``hits``), in turn, in one call (a frame's
+        candidates): a track unseen for more than ``max_missed`` frames starts over."""
         history, mask, gap = self.history, self.mask, self.max_missed + 1
         for track_id, hit in zip(track_ids, hits, strict=True):
             last_k, bits = history.get(track_id, (None, 0))

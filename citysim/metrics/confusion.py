@@ -7,6 +7,7 @@ imports neither. Boxes are OpenCV rects ``(x, y, w, h)`` in pixels.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -24,27 +25,12 @@ _CLASS_INDEX = {cls: i for i, cls in enumerate(CONFUSION_CLASSES)}
 _TARGET_DETECTOR_CLASSES = DETECTOR_CLASSES[1:]
 
 
+@functools.cache  # asked per truth object per frame; the kinds' records are fixed
 def scored_as(cls: str) -> str:
     """The detector class a truth object of kind ``cls`` is scored as (its record's
     ``detector_class``; an unknown kind is noise)."""
     kind = AGENT_KINDS.get(cls)
     return kind.detector_class if kind is not None else "noise"
-
-
-#: ``scored_as`` of each kind asked so far (asked per truth object per frame; the records are fixed)
-_SCORED_AS: dict[str, str] = {}
-
-
-def _scored_as_all(truth: Sequence[TruthLike]) -> list[str]:
-    """``scored_as`` of each truth object's class, from ``_SCORED_AS``."""
-    out = []
-    for t in truth:
-        cls = t.cls
-        scored = _SCORED_AS.get(cls)
-        if scored is None:
-            scored = _SCORED_AS[cls] = scored_as(cls)
-        out.append(scored)
-    return out
 
 
 class TruthLike(Protocol):
@@ -202,7 +188,7 @@ class DetectionConfusion:
     def _add_matched(self, truth: Sequence[TruthLike], detections: Sequence[DetectionLike], lamp_index: int,
                      t_s: float) -> None:  # fmt: skip
         """``add`` of a frame with road users or detections: matched to the truth boxes, each counted."""
-        truth_cls = _scored_as_all(truth)
+        truth_cls = [scored_as(t.cls) for t in truth]
         det_cls = [_CLASS_INDEX.get(d.cls) for d in detections]
         if None in det_cls:  # the error ``_index`` gives
             det_cls = [self._index(d.cls, "detections.cls") for d in detections]
