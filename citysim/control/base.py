@@ -44,6 +44,8 @@ class ControlContext:
     #: The lamps' levels and ramping, read once per step by everything that needs them (made from
     #: ``lamps`` when not given)
     lamp_states: LampStates | None = None
+    #: The world's step (1 / ``physics_hz``), s: controllers that decide once a step allow for it
+    physics_step_s: float = 1.0 / 30.0
 
     def __post_init__(self) -> None:
         if self.lamp_states is None:

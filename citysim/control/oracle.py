@@ -18,9 +18,7 @@ import numpy as np
 from citysim.config.kinds import TARGET_KINDS
 from citysim.control.base import ControlContext, Controller
 from citysim.world.agents import AgentState
-
-#: a step's needed zones are a bitmask in an int64 (bit j: zone j): up to this many zones
-MAX_MASK_ZONES = 62
+from citysim.world.street import MAX_MASK_ZONES
 
 
 class Oracle(Controller):
@@ -33,8 +31,8 @@ class Oracle(Controller):
         self.zone_start_m = np.array([s.zone_start_m for s in ctx.street.lamps])
         self.zone_end_m = np.array([s.zone_end_m for s in ctx.street.lamps])
         lum = ctx.luminaire
-        # dim -> full takes (1 - dim) of a full swing; two physics steps of margin at 30 Hz
-        self.lead_s = (1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 / 30.0
+        # dim -> full takes (1 - dim) of a full swing; two of the world's steps of margin (it decides once a step)
+        self.lead_s = (1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 * ctx.physics_step_s
         # replayed steps (``citysim.sim.recorded``): each step's zones needed, one numpy pass a chunk
         self._by_chunk = len(self.zone_start_m) <= MAX_MASK_ZONES
         self._needed_chunk: tuple[object, list[list[int]]] | None = None

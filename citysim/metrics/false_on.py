@@ -13,9 +13,9 @@ import numpy as np
 
 from citysim.config.kinds import TARGET_KINDS
 from citysim.metrics.collector import Collector
-from citysim.metrics.recorded_rows import MAX_MASK_ZONES, recorded_step, step_masks, zone_of
+from citysim.metrics.recorded_rows import recorded_step, step_masks, zone_of
 from citysim.world.agents import AgentState
-from citysim.world.street import Street
+from citysim.world.street import MAX_MASK_ZONES, Street
 
 
 class FalseOnTime(Collector):

@@ -14,9 +14,6 @@ from typing import Any
 
 import numpy as np
 
-#: a step's occupied zones are a bitmask in an int64 (bit j: zone j): up to this many zones
-MAX_MASK_ZONES = 62
-
 
 def recorded_step(agents: Any) -> tuple[Any, int] | None:
     """(chunk, step) of a replayed step's agents; None for any other sequence of agents."""

@@ -86,7 +86,8 @@ def build_controller(night: Night, spec: ControllerSpec, sensors: object | None 
     network = Network(night.env, len(lamps), scenario.network, night.streams["network"])
     ctx = ControlContext(street=night.street, lamps=lamps, luminaire=lum,
                          frame_period_s=1.0 / night.street.lamps[0].camera.fps, rng=night.streams["control"],
-                         network=network, start_hour=scenario.start_hour, spec=spec, sensors=sensors)  # fmt: skip
+                         network=network, start_hour=scenario.start_hour, spec=spec, sensors=sensors,
+                         physics_step_s=night.physics_dt_s)  # fmt: skip
     return controller_cls(ctx)
 
 

@@ -22,6 +22,11 @@ if TYPE_CHECKING:
     from citysim.config.street import ScenerySpec
 
 
+#: The per-chunk paths (the oracle, the zone metrics) keep a step's lamp zones as the bits of an
+#: int64 (bit j: zone j): they take them for streets of up to this many zones, else go agent by agent.
+MAX_MASK_ZONES = 62
+
+
 @dataclass(frozen=True)
 class Lane:
     y_center_m: float

@@ -7,7 +7,8 @@ import pytest
 
 from citysim.config.scenario import ControllerSpec, scenario_from_mapping
 from citysim.sim.compare import resolve_controllers, with_savings_vs_oracle
-from citysim.sim.loop import run_controller
+from citysim.sim.loop import build_controller, run_controller
+from citysim.sim.night import build_night
 from tests.citysim.sim.test_loop import FPS, tiny_scenario
 
 
@@ -35,6 +36,14 @@ def test_oracle_lights_from_one_ramp_before_entry_until_exit_plus_hold():
     assert result["energy_kwh"] * 3.6e6 == pytest.approx(energy_hand_j, abs=one_frame_j)
     trig = result["lamp_triggers"][0]
     assert trig["first_s"] == pytest.approx(t_on, abs=1.0 / FPS)
+
+
+@pytest.mark.parametrize("physics_hz", [30.0, 60.0])
+def test_the_oracles_margin_is_two_of_the_worlds_steps(physics_hz):
+    scenario = scenario_from_mapping({**tiny_scenario(), "physics_hz": physics_hz})
+    oracle = build_controller(build_night(scenario), ControllerSpec(name="oracle"))
+    lum = scenario.lamps.luminaire
+    assert oracle.lead_s == pytest.approx((1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 / physics_hz, abs=1e-12)
 
 
 def test_every_comparison_holds_always_on_and_the_oracle_first():
