@@ -83,4 +83,6 @@ class EnergyCollector(Collector):
             "on_time_s": energy["on_time_s"],
             "energy_per_hour_kwh": self.hourly_kwh,
             "energy_split_kwh": {k.removesuffix("_energy_kwh"): energy[k] for k in split},
+            # where it was drawn: the report sets each lamp against the oracle's (``report.oracle_gap``)
+            "energy_per_lamp_kwh": [lamp.energy_j / J_PER_KWH for lamp in self.lamps],
         }

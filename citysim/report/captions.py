@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 
 from citysim.report.frontier import HOW_TO_READ
+from citysim.report.oracle_gap import HOW_TO_READ as GAP_HOW_TO_READ
 
 __all__ = ["caption_for"]
 
@@ -24,6 +25,7 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "keeps every lamp at full: a lower bar saves more, but read it together with the lag "
         "figures, since a controller that saves by leaving people in the dark is no saving.",
     ),
+    "oracle_gap.png": ("Where each controller spends beyond the bound, lamp by lamp", GAP_HOW_TO_READ),
     "energy_per_hour.png": (
         "Energy per hour of the night",
         "Energy drawn in each clock hour, one bar per controller, so you can see when a controller "

@@ -5,6 +5,8 @@
 
 * ``energy.png``: energy per controller (kWh), split into luminaire, standby and
   sensing where the summary has the split, labelled with savings vs always-on;
+* ``oracle_gap.png``: each lamp's energy above the oracle's, per controller
+  (``citysim.report.oracle_gap``: where the gap to the bound comes from);
 * ``energy_per_hour.png``: energy per clock hour of the night per controller;
 * ``lamp_levels.png``: light level over clock time of the busiest lamps, one row of
   panels per controller (true levels, nothing shifted), with the object passages
@@ -49,12 +51,13 @@ from citysim.report.common import (
 )
 from citysim.report.frontier import frontier_figure
 from citysim.report.lag_cdf import plot_lag_cdf
+from citysim.report.oracle_gap import plot_oracle_gap
 from citysim.report.runfacts import RunFacts, load_summary, read_passages, run_facts
 
 __all__ = ["RUN_PLOTS", "PlotError", "load_summary", "plot_run", "read_passages"]
 
 #: The plots drawn from the run folder's traffic data (each says how many objects it rests on).
-TRAFFIC_PLOTS = ("frontier.png", "energy.png", "energy_per_hour.png", "lamp_levels.png", "lag_cdf.png")
+TRAFFIC_PLOTS = ("frontier.png", "energy.png", "oracle_gap.png", "energy_per_hour.png", "lamp_levels.png", "lag_cdf.png")
 #: Every plot of a run, in the order the report shows them: the traffic plots and the camera coverage map (drawn from the scenario).
 RUN_PLOTS = (*TRAFFIC_PLOTS, "coverage.png")
 #: Lamps shown in lamp_levels.png, and the longest stretch of time shown (s).
@@ -85,6 +88,8 @@ def plot_run(run_dir: str | Path) -> list[Path]:
                                facts.objects)  # fmt: skip
     paths = [save(frontier, plot_dir / "frontier.png")] if frontier else []
     paths.append(plot_energy(summary, facts, plot_dir / "energy.png"))
+    gap = plot_oracle_gap(summary, facts.objects, plot_dir / "oracle_gap.png")
+    paths += [gap] if gap else []
     paths.append(plot_energy_per_hour(summary, facts, plot_dir / "energy_per_hour.png"))
     levels = plot_lamp_levels(run_dir, summary, passages, facts, plot_dir / "lamp_levels.png", notes)
     paths += [levels] if levels else []

@@ -65,6 +65,7 @@ def test_plot_run_draws_energy_levels_and_lag(run_copy):
     assert [p.name for p in paths] == [
         "frontier.png",
         "energy.png",
+        "oracle_gap.png",  # pir's line: the fixture's run holds the oracle
         "energy_per_hour.png",
         "lamp_levels.png",
         "lag_cdf.png",
@@ -74,7 +75,8 @@ def test_plot_run_draws_energy_levels_and_lag(run_copy):
         assert p.parent == run_dir / "plots"
         assert_real_plot(p)
     # the controllers' own colours are where their data are drawn
-    energy, levels = rgb(paths[1]), rgb(paths[3])
+    energy, levels = rgb(paths[1]), rgb(paths[4])
+    assert pixels_of(rgb(paths[2]), CONTROLLER_COLORS["pir"]) > 100
     for name in ("always_on", "pir"):
         assert pixels_of(energy, CONTROLLER_COLORS[name]) > 2000
         assert pixels_of(levels, CONTROLLER_COLORS[name]) > 100
@@ -95,7 +97,7 @@ def test_run_report_embeds_every_plot(run_copy):
     html = report.read_text()
     uris = re.findall(r'<img alt="([^"]+)" src="data:image/png;base64,([^"]+)"', html)
     on_disk = sorted(p.name for p in (run_dir / "plots").glob("*.png"))
-    assert sorted(n for n, _ in uris) == on_disk and len(on_disk) == 6
+    assert sorted(n for n, _ in uris) == on_disk and len(on_disk) == 7
     for name, data in uris:
         decoded = cv2.imdecode(np.frombuffer(base64.b64decode(data), np.uint8), cv2.IMREAD_COLOR)
         assert decoded is not None

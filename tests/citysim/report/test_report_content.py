@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from citysim.report import lag_cdf, run_plots
+from citysim.report import lag_cdf, oracle_gap, run_plots
 from citysim.report.captions import caption_for
 from citysim.report.common import (
     FEW_OBJECTS,
@@ -190,6 +190,7 @@ def test_few_objects_warning_on_the_plots(run_copy, monkeypatch):
 
     monkeypatch.setattr(run_plots, "save", keep)
     monkeypatch.setattr(lag_cdf, "save", keep)
+    monkeypatch.setattr(oracle_gap, "save", keep)
     plot_run(run_copy)
     assert {name for name, _ in drawn} == set(TRAFFIC_PLOTS)
     for name, texts in drawn:
@@ -355,6 +356,7 @@ def test_every_legend_gives_the_number_of_objects(run_copy, monkeypatch):
 
     monkeypatch.setattr(run_plots, "save", keep)
     monkeypatch.setattr(lag_cdf, "save", keep)
+    monkeypatch.setattr(oracle_gap, "save", keep)
     plot_run(run_copy)
     assert {name for name, _ in legends} == set(TRAFFIC_PLOTS)
     for name, text in legends:

@@ -1,0 +1,78 @@
+"""Where each controller spends more than the oracle: its energy above the bound, lamp by lamp.
+
+The oracle lights each zone exactly while someone needs it (``citysim.control.oracle``), so a
+controller's energy at one lamp minus the oracle's at the same lamp, on the same night, is what
+that lamp cost beyond need: held for a track that went elsewhere, kept at full because no camera
+watches the zone's approach, lit by a false alarm. Below zero the lamp was dimmer than the bound
+wanted, and someone may have met the dark there. Read from summary.json's ``energy_per_lamp_kwh``
+(run folders written before it existed draw no such plot).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from citysim.report.common import controller_color, plt, save, warn_few_objects
+
+#: The sentence a planner reads beside the plot.
+HOW_TO_READ = (
+    "Each line is a controller; each point is one lamp (in order along the street) and how many "
+    "watt-hours that lamp drew beyond what the oracle, which knows where everyone is, needed on "
+    "the same night (0 = the bound); under each lamp, the share of its zone some camera sees. A tall "
+    "point at one lamp is where a controller's gap to the bound comes from: an end lamp kept at "
+    "full because no camera watches the street before it, or a lamp lit for people who went "
+    "elsewhere; a point below zero is a lamp dimmer than the oracle's, where someone may have "
+    "walked into the dark."
+)
+
+#: Controllers not drawn: always-on's gap is every lamp's whole dim saving, and the oracle's is 0.
+LEFT_OUT = ("always_on", "oracle")
+
+
+def oracle_gap_wh(controllers: Mapping[str, Mapping]) -> dict[str, list[float]] | None:
+    """Per controller of summary.json's ``controllers`` (but ``LEFT_OUT``): each lamp's energy minus
+    the oracle's at the same lamp, Wh, in lamp order. None without an oracle or per-lamp energies."""
+    oracle = next((c for c in controllers.values() if c.get("controller") == "oracle"), None)
+    if oracle is None or oracle.get("energy_per_lamp_kwh") is None:
+        return None
+    bound_kwh = np.asarray(oracle["energy_per_lamp_kwh"], dtype=float)
+    gaps = {}
+    for label, figures in controllers.items():
+        per_lamp = figures.get("energy_per_lamp_kwh")
+        if figures.get("controller", label) in LEFT_OUT or per_lamp is None or len(per_lamp) != len(bound_kwh):
+            continue
+        gaps[label] = ((np.asarray(per_lamp, dtype=float) - bound_kwh) * 1000.0).tolist()
+    return gaps or None
+
+
+def plot_oracle_gap(summary: Mapping, n_objects: int | None, path: Path) -> Path | None:
+    """Write the per-lamp gap plot to ``path``; None (nothing written) when ``oracle_gap_wh`` has none."""
+    gaps = oracle_gap_wh(summary.get("controllers", {}))
+    if gaps is None:
+        return None
+    order = list(gaps)
+    n_lamps = len(next(iter(gaps.values())))
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.55 * n_lamps + 3.0), 4.4))
+    lamps = np.arange(n_lamps)
+    for label, gap_wh in sorted(gaps.items(), key=lambda item: -sum(item[1])):
+        ax.plot(lamps, gap_wh, marker="o", markersize=4, linewidth=1.2, color=controller_color(label, order),
+                label=f"{label} ({sum(gap_wh):+.1f} Wh)")  # fmt: skip
+    ax.axhline(0.0, color="black", linewidth=1.0)
+    ax.annotate("oracle", (n_lamps - 1, 0.0), textcoords="offset points", xytext=(4, 3), fontsize=8)
+    seen = (summary.get("coverage") or {}).get("zone_seen")
+    if seen is not None and len(seen) == n_lamps:
+        ax.set_xticks(lamps, [f"{j}\n{100 * share:.0f} %" for j, share in enumerate(seen)], fontsize=8)
+        ax.set_xlabel("lamp (in order along the street) and the share of its zone a camera sees")
+    else:
+        ax.set_xticks(lamps)
+        ax.set_xlabel("lamp (in order along the street)")
+    ax.set_ylabel("energy above the oracle's (Wh)")
+    ax.set_title(f"{summary.get('scenario', '')}: where each controller spends beyond the bound")
+    ax.grid(alpha=0.3)
+    runs = "" if n_objects is None else f"run: n={n_objects} objects; "
+    ax.legend(title=f"{runs}whole street", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    warn_few_objects(fig, n_objects)
+    return save(fig, path)
