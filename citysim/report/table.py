@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from citysim.report.oracle_gap import gap_line
 from citysim.world.approaches import describe_short
 
 
@@ -35,6 +36,9 @@ def comparison_table(summary: dict) -> str:
         blind = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in coverage["blind_stretches_m"]) or "none"
         lines.append(f"camera coverage: {100 * coverage['street_seen']:.0f} % of the lanes and sidewalks in the "
                      f"lamp zones is seen whole within 25 m by some camera; blind stretches (x, m): {blind}")
+    gap = gap_line(summary)
+    if gap:
+        lines.append(gap)
     short = describe_short(summary.get("approaches") or {})
     if short:
         lines.append(short)
