@@ -102,6 +102,6 @@ def plot_oracle_gap(summary: Mapping, n_objects: int | None, path: Path) -> Path
     ax.set_title(f"{summary.get('scenario', '')}: where each controller spends beyond the bound")
     ax.grid(alpha=0.3)
     runs = "" if n_objects is None else f"run: n={n_objects} objects; "
-    ax.legend(title=f"{runs}whole street", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.legend(title=f"{runs}(in brackets: all lamps)", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     warn_few_objects(fig, n_objects)
     return save(fig, path)
