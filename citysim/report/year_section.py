@@ -30,7 +30,9 @@ TABLE_HOWTO = (
     "tariff, CO2 at its grid factor, and the AECI (EN 13201-5's annual energy per square metre lit, "
     "Wh/m2: lower is better, and it compares streets of different sizes). Lit on entry is the share "
     "of all zone entries of the year whose lamp was already at full level; dark s is the seconds road "
-    "users spent in a zone below full, summed over the year."
+    "users spent in a zone below full, summed over the year. In brackets beside lit on entry, a 95 % "
+    "interval: the road users of the table's traffic-level runs resampled, so it shows how far the rate "
+    "could be off from those few hundred entries alone (not the sensor model's own error)."
 )
 
 
@@ -63,12 +65,19 @@ def _rows(result: dict) -> list[list[str]]:
     for label, f in result["controllers"].items():
         rows.append([label, fmt_quantity(f["energy_kwh_per_year"], "kWh"), fmt_pct(f["savings_vs_always_on"]),
                      fmt_quantity(f["cost_per_year"], cur), fmt_quantity(f["co2_kg_per_year"], "kg"),
-                     fmt_quantity(f["aeci_wh_per_m2"], "Wh/m2"), fmt_pct(f["lit_on_entry_rate"]),
+                     fmt_quantity(f["aeci_wh_per_m2"], "Wh/m2"), lit_with_interval(f),
                      fmt_num(f["dark_s_per_year"])])  # fmt: skip
     return rows
 
 
 HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "dark s / year"]
+
+
+def lit_with_interval(figures: dict) -> str:
+    """'97.5 % (95.9-98.8)': the year's lit-on-entry rate and its 95 % interval, where it has one."""
+    interval = figures.get("lit_on_entry_interval_95")
+    rate = fmt_pct(figures["lit_on_entry_rate"])
+    return rate if interval is None else f"{rate} ({100 * interval[0]:.1f}-{100 * interval[1]:.1f})"
 
 
 def sampled_entries(result: dict) -> int:
@@ -87,8 +96,9 @@ def year_table(result: dict) -> str:
              for r in rows]  # fmt: skip
     # a rate read off a few hundred entries cannot show a 1-3 % dark share reliably: say how few
     note = (f"lit on entry and dark s / year are read from {sampled_entries(result):,} zone entries measured in the "
-            f"table's traffic-level runs ({fmt_num(result['sample_s'])} s each); a whole night in fast mode "
-            "(citysim run --fidelity fast --duration 28800) counts thousands")
+            f"table's traffic-level runs ({fmt_num(result['sample_s'])} s each); in brackets a 95 % interval from "
+            "resampling their road users; a whole night in fast mode (citysim run --fidelity fast --duration "
+            "28800) counts thousands")
     return "\n".join([lines[0], "-" * len(lines[0]), *lines[1:], note])
 
 

@@ -18,6 +18,7 @@ lane and sidewalk edges).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -29,6 +30,11 @@ from citysim.year.twilight import HourPiece
 
 #: Idle energies of a controller that differ between clock hours by more than this share read the clock.
 CLOCK_TOLERANCE = 1e-6
+#: Controllers that light every entry by their definition (always-on; the oracle, given approaches):
+#: an interval of their lit-on-entry rate would only say how little traffic the table saw.
+LIT_BY_DEFINITION = ("always_on", "oracle")
+#: Resamples behind the lit-on-entry interval, and the seed they are drawn with (same table, same interval).
+INTERVAL_RESAMPLES, INTERVAL_SEED = 2000, 20240611
 
 
 def lit_area_m2(scenario: Scenario, year: YearSpec) -> tuple[float, float, float]:
@@ -65,10 +71,61 @@ def piece_energy_kwh(table: ResponseTable, label: str, piece: HourPiece, level: 
     return piece.hours * (table.idle[piece.clock_hour][label]["energy_kwh"] + energy(level))
 
 
+def level_weights(table: ResponseTable, pieces: list[tuple[HourPiece, int, float]]) -> np.ndarray:
+    """Per level run, the weight its entries (or lit entries) carry in the year's sum: the year's
+    total of a per-hour figure read off the levels (``_curve``) is linear in the level runs'
+    values, so it is ``weights @ values``; found by reading the year off each run alone."""
+    levels = [0.0, *table.levels]
+    weights = np.zeros(len(table.levels))
+    for k in range(len(weights)):
+        unit = [0.0] * len(levels)
+        unit[k + 1] = 1.0
+        weights[k] = sum(piece.hours * _interp(levels, unit, level) for piece, _, level in pieces)
+    return weights
+
+
+def lit_on_entry_interval(table: ResponseTable, label: str, weights: np.ndarray) -> tuple[float, float] | None:
+    """A 95 % interval of the year's lit-on-entry rate for ``label``: Wilson's score interval, its n
+    the number of independent entries the rate's spread amounts to. The spread comes from
+    resampling each level run's road users with replacement (a road user's entries go together:
+    one dark car may be dark in several zones); where every resample gives the same rate (no entry
+    dark, or none lit) it says nothing, and n is the number of road users. None without tallies."""
+    tallies = [table.tallies.get(level, {}).get(label) for level in table.levels]
+    if any(t is None for t in tallies) or not any(t for t in tallies):
+        return None
+    rng = np.random.default_rng(INTERVAL_SEED)
+    entries, lit = np.zeros(INTERVAL_RESAMPLES), np.zeros(INTERVAL_RESAMPLES)
+    rate_entries = rate_lit = 0.0
+    for weight, objects in zip(weights, tallies, strict=True):
+        if not objects:
+            continue
+        counts = np.asarray(objects, dtype=float)  # (road users, 2): entries, lit entries
+        rate_entries, rate_lit = rate_entries + weight * counts[:, 0].sum(), rate_lit + weight * counts[:, 1].sum()
+        picks = rng.integers(len(counts), size=(INTERVAL_RESAMPLES, len(counts)))
+        entries += weight * counts[picks, 0].sum(axis=1)
+        lit += weight * counts[picks, 1].sum(axis=1)
+    if rate_entries <= 0:
+        return None
+    rate = rate_lit / rate_entries
+    spread = float(np.var(lit[entries > 0] / entries[entries > 0]))
+    n = rate * (1.0 - rate) / spread if spread > 0 and 0 < rate < 1 else float(sum(len(t) for t in tallies))
+    return wilson_interval(rate, n)
+
+
+def wilson_interval(rate: float, n: float, z: float = 1.959964) -> tuple[float, float]:
+    """Wilson's score interval of a share ``rate`` out of ``n`` trials (95 % by default)."""
+    z2n = z * z / n
+    centre = (rate + z2n / 2.0) / (1.0 + z2n)
+    half = z * math.sqrt(rate * (1.0 - rate) / n + z2n / (4.0 * n)) / (1.0 + z2n)
+    # at a share of 0 or 1 the bound on that side is exactly it (the float sum can miss it by an ulp)
+    return (0.0 if rate <= 0.0 else max(0.0, centre - half)), (1.0 if rate >= 1.0 else min(1.0, centre + half))
+
+
 def annual_figures(table: ResponseTable, pieces: list[tuple[HourPiece, int, float]], scenario: Scenario,
                    year: YearSpec) -> dict:
     """year.json's figures. ``pieces``: (hour piece, month of its night 1..12, traffic level)."""
     levels = [0.0, *table.levels]
+    weights = level_weights(table, pieces)
     area_m2, chain_m, width_m = lit_area_m2(scenario, year)
     out: dict[str, dict] = {}
     for label in table.labels:
@@ -93,6 +150,9 @@ def annual_figures(table: ResponseTable, pieces: list[tuple[HourPiece, int, floa
             # a clock-read light at the reference hour says nothing of its other hours: no figure
             "lit_on_entry_rate": None if reads_clock or not totals["zone_entries"]
             else totals["lit_entries"] / totals["zone_entries"],
+            # how far the rate could be off from the table's few hundred entries alone
+            "lit_on_entry_interval_95": None if reads_clock or not totals["zone_entries"] or label in LIT_BY_DEFINITION
+            else lit_on_entry_interval(table, label, weights),
             "zone_entries_per_year": totals["zone_entries"],
             "dark_s_per_year": None if reads_clock else totals["dark_s"],
             "monthly_energy_kwh": monthly,

@@ -26,7 +26,7 @@ import tempfile
 from collections import defaultdict
 from collections.abc import Sequence
 from concurrent.futures import as_completed
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from tqdm import tqdm
@@ -72,6 +72,9 @@ class ResponseTable:
     labels: list[str]
     cells: list[Cell]
     wall_s: float = 0.0
+    #: per level run and controller, (zone entries, lit on entry) of each road user in its window:
+    #: what the lit-on-entry interval resamples (``annual.lit_on_entry_interval``); not in year.json
+    tallies: dict[float, dict[str, list[tuple[int, int]]]] = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {"reference_hour": self.reference_hour, "labels": self.labels,
@@ -124,15 +127,30 @@ def window_figures(folder: Path, labels: Sequence[str], t0_s: float, t1_s: float
     return {label: {k: v * per_hour for k, v in figs.items()} for label, figs in totals.items()}
 
 
-def run_cell(scenario: Scenario, cell: Cell, names: list[str] | None, fidelity: str, sensor_model=None) -> dict:
-    """One run of the table (in a worker process): its per-hour figures per controller."""
+def object_tallies(folder: Path, labels: Sequence[str], t0_s: float, t1_s: float) -> dict[str, list[tuple[int, int]]]:
+    """Per controller, each road user's (zone entries, entries lit on entry) made inside [t0_s, t1_s)."""
+    tallies: dict[str, dict[str, list[int]]] = {label: {} for label in labels}
+    with open(folder / "objects.csv", newline="") as fh:
+        for row in csv.DictReader(fh):
+            if t0_s <= float(row["t_enter_s"]) < t1_s:
+                counts = tallies[row["controller"]].setdefault(row["object_id"], [0, 0])
+                counts[0] += 1
+                counts[1] += int(row["lit_on_entry"])
+    return {label: [(e, lit) for e, lit in objects.values()] for label, objects in tallies.items()}
+
+
+def run_cell(scenario: Scenario, cell: Cell, names: list[str] | None, fidelity: str,
+             sensor_model=None) -> tuple[dict, dict]:  # fmt: skip
+    """One run of the table (in a worker process): its per-hour figures per controller, and each
+    road user's entries and lit entries (``object_tallies``)."""
     variant = cell_variant(scenario, cell)
     folder = Path(tempfile.mkdtemp(prefix="citysim-year-")) / "run"
     try:
         summary = run_comparison(variant, names, workers=1, fidelity=fidelity, out_dir=folder,
                                  sensor_model=sensor_model)  # fmt: skip
         labels = list(summary["controllers"])
-        return window_figures(folder, labels, cell.warmup_s, cell.duration_s)
+        return (window_figures(folder, labels, cell.warmup_s, cell.duration_s),
+                object_tallies(folder, labels, cell.warmup_s, cell.duration_s))
     finally:
         shutil.rmtree(folder.parent, ignore_errors=True)
 
@@ -155,7 +173,7 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
     # idle cell (no traffic) lists fewer kinds, so looking its model up by its own key calibrated a
     # second model on empty nights (2 min on a fresh clone) that knew no road user
     model = sensor_model_for(scenario, progress=progress) if fidelity == "fast" and needs_sensor_model(specs) else None
-    results: dict[Cell, dict] = {}
+    results: dict[Cell, tuple[dict, dict]] = {}
     if workers <= 1:
         for cell in cells:
             results[cell] = run_cell(scenario, cell, names, fidelity, model)
@@ -168,14 +186,15 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
                 bar.update(cost[futures[done]])
     bar.close()
     levels: dict[float, dict] = {}
+    tallies: dict[float, dict] = {}
     idle: dict[int, dict] = defaultdict(dict)
     for cell in cells:  # in plan order, whatever order they finished in
         if cell.kind == "level":
-            levels[cell.level] = results[cell]
+            levels[cell.level], tallies[cell.level] = results[cell]
         else:
-            idle[int(cell.start_hour)] = results[cell]
+            idle[int(cell.start_hour)] = results[cell][0]
     return ResponseTable(int(scenario.start_hour), dict(sorted(levels.items())), dict(idle), labels, cells,
-                         time.perf_counter() - start)
+                         time.perf_counter() - start, dict(sorted(tallies.items())))
 
 
 def load_table(path: Path) -> dict:

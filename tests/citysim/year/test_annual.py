@@ -89,3 +89,57 @@ def test_an_idle_cell_alone_would_key_a_model_of_its_own():
     suburban = load_scenario(Path(__file__).resolve().parents[3] / "scenarios" / "suburban_night.yaml")
     idle = cell_variant(suburban, Cell("idle", 0.0, 2.0, 10.0, 60.0))
     assert calibration_key(idle, 120.0, 2) != calibration_key(suburban, 120.0, 2)
+
+
+def _tallied_table(objects: list[tuple[int, int]]) -> ResponseTable:
+    """One traffic level whose figures are its road users' (entries, lit entries) summed."""
+    entries, lit = sum(e for e, _ in objects), sum(v for _, v in objects)
+    return ResponseTable(reference_hour=22, levels={1.0: {"pir": _figs(2.0, entries, lit)}},
+                         idle={22: {"pir": _figs(1.0)}}, labels=["pir"], cells=[],
+                         tallies={1.0: {"pir": objects}})  # fmt: skip
+
+
+def test_the_lit_on_entry_interval_resamples_road_users_and_narrows_with_more_of_them(toy):
+    from citysim.year.annual import wilson_interval
+
+    pieces = [(HourPiece(dt.date(2025, 1, 6), 22, 1.0), 1, 0.8), (HourPiece(dt.date(2025, 1, 7), 22, 1.0), 1, 1.6)]
+
+    def figures(objects):
+        return annual_figures(_tallied_table(objects), pieces, toy, toy.year)["controllers"]["pir"]
+
+    # two road users, one lit in both its zones, one dark in both: two trials, not four entries
+    two = figures([(2, 2), (2, 0)])
+    assert two["lit_on_entry_rate"] == pytest.approx(0.5)
+    assert two["lit_on_entry_interval_95"] == pytest.approx(wilson_interval(0.5, 2.0), abs=0.03)
+    # 98 of 100 lit: a few points wide around the rate, and drawn the same each time
+    many = [(1, 1)] * 98 + [(1, 0)] * 2
+    lo, hi = figures(many)["lit_on_entry_interval_95"]
+    assert 0.90 < lo < 0.98 < hi < 1.0
+    assert figures(many)["lit_on_entry_interval_95"] == (lo, hi)
+    # everyone lit: resampling shows no spread, so the road users count as the trials (n = 50, not 150)
+    lo, hi = figures([(3, 3)] * 50)["lit_on_entry_interval_95"]
+    assert hi == 1.0 and lo == pytest.approx(wilson_interval(1.0, 50.0)[0]) and 0.9 < lo < 0.95
+
+
+def test_wilsons_interval_against_a_hand_computed_one():
+    from citysim.year.annual import wilson_interval
+
+    # 8 of 10: centre (0.8 + 0.192) / 1.384 = 0.7168, half 1.96 * sqrt(0.016 + 0.0096) / 1.384 = 0.2266
+    lo, hi = wilson_interval(0.8, 10.0)
+    assert lo == pytest.approx(0.4902, abs=2e-4) and hi == pytest.approx(0.9433, abs=2e-4)
+
+
+def test_the_level_weights_give_the_years_sums(toy):
+    from citysim.year.annual import level_weights
+
+    table = ResponseTable(
+        reference_hour=22,
+        levels={1.0: {"pir": _figs(2.0, 10, 9)}, 2.0: {"pir": _figs(3.0, 24, 20)}},
+        idle={h: {"pir": _figs(1.0)} for h in (22, 23, 3)}, labels=["pir"], cells=[])  # fmt: skip
+    pieces = [(HourPiece(dt.date(2025, 1, 6), 22, 0.5), 1, 1.5), (HourPiece(dt.date(2025, 2, 7), 3, 1.0), 2, 3.0),
+              (HourPiece(dt.date(2025, 3, 7), 23, 1.0), 3, 0.4)]  # between, above and below the levels
+    weights = level_weights(table, pieces)
+    f = annual_figures(table, pieces, toy, toy.year)["controllers"]["pir"]
+    assert weights @ [10, 24] == pytest.approx(f["zone_entries_per_year"], rel=1e-12)
+    assert (weights @ [9, 20]) / (weights @ [10, 24]) == pytest.approx(f["lit_on_entry_rate"], rel=1e-12)
+    assert f["lit_on_entry_interval_95"] is None  # a table without road users' tallies has none

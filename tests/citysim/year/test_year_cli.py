@@ -37,6 +37,10 @@ def test_year_writes_annual_figures_plot_and_report(toy_file, tmp_path, capsys):
     (level,) = result["table"]["levels"].values()
     entries = round(level["always_on"]["zone_entries"] * result["sample_s"] / 3600)
     assert f"read from {entries:,} zone entries measured" in printed
+    # ... and a 95 % interval of the rate from resampling their road users, beside the rate
+    lo, hi = result["controllers"]["pir"]["lit_on_entry_interval_95"]
+    assert lo <= result["controllers"]["pir"]["lit_on_entry_rate"] <= hi
+    assert f"({100 * lo:.1f}-{100 * hi:.1f})" in printed and "95 % interval" in printed
 
 
 def _no_year(tmp_path, toy_file):
