@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from citysim.metrics.collector import Collector
+from citysim.metrics.intervals import lit_share_interval
 from citysim.metrics.zones import ZoneTracker
 from citysim.world.agents import AgentState
 from citysim.world.street import Street
@@ -30,11 +31,18 @@ class CrossingsCollector(Collector):
         """``kinds``: the road-user kinds that need light in a zone (default: the detector's targets)."""
         self.zones = ZoneTracker(street, None if kinds is None else dict.fromkeys(kinds, 1.0))
         self.label, self.writer = label, writer
+        #: per road user, [zone entries, entries lit on entry]: what the rate's interval resamples
+        self.tallies: dict[int, list[int]] = {}
 
     def _write_rows(self) -> None:
-        if self.writer is None or not self.zones.has_rows:
+        if not self.zones.has_rows:
             return
         for row in self.zones.rows(drain=True):
+            tally = self.tallies.setdefault(row["object_id"], [0, 0])
+            tally[0] += 1
+            tally[1] += bool(row["lit_on_entry"])
+            if self.writer is None:
+                continue
             self.writer.writerow([
                 self.label, row["object_id"], row["cls"], row["lamp"], f"{row['t_enter_s']:.3f}",
                 f"{row['t_exit_s']:.3f}", f"{row['lag_s']:.3f}", f"{row['dark_s']:.3f}",
@@ -56,6 +64,8 @@ class CrossingsCollector(Collector):
             # the planner's darkness axis: share of zone entries whose lamp was already at the
             # level the object needs (None without entries)
             "lit_on_entry_rate": overall["lit_on_entry_fraction"],
+            # how far that rate could be off from this night's road users alone (``metrics.intervals``)
+            "lit_on_entry_interval_95": lit_share_interval([(1.0, [tuple(t) for t in self.tallies.values()])]),
             "zone_entries": entries,
             "dark_s_per_100_entries": 100.0 * overall["dark_exposure_total_s"] / entries if entries else None,
             "lag_p50_s": overall["lag_p50_s"],

@@ -17,7 +17,9 @@ HOW_TO_READ = (
     "Each point is a controller: further right, fewer people walk or drive into a dim zone; "
     "higher, more energy saved against always-on lamps. The best controllers sit near the "
     "oracle (perfect knowledge of where everyone is), top right; a point low or to the left "
-    "buys its savings with darkness or its light with energy."
+    "buys its savings with darkness or its light with energy. The bar through a point spans the "
+    "95 % interval of its lit-on-entry rate: how far that rate could be off from this run's road "
+    "users alone (few road users, wide bars)."
 )
 
 
@@ -54,11 +56,18 @@ def frontier_figure(controllers: Mapping[str, Mapping], title: str = "savings vs
     order = list(points)
     for name, (x, y) in points.items():
         oracle = controllers[name].get("controller") == "oracle"
-        ax.scatter([x], [y], s=90 if oracle else 45, marker="*" if oracle else "o",
-                   color="black" if oracle else controller_color(name, order), label=name, zorder=3)  # fmt: skip
+        color = "black" if oracle else controller_color(name, order)
+        interval = controllers[name].get("lit_on_entry_interval_95")
+        if interval is not None:
+            ax.errorbar([x], [y], xerr=[[x - interval[0]], [interval[1] - x]], fmt="none", ecolor=color,
+                        elinewidth=1.0, capsize=3, alpha=0.6, zorder=2)  # fmt: skip
+        ax.scatter([x], [y], s=90 if oracle else 45, marker="*" if oracle else "o", color=color, label=name,
+                   zorder=3)  # fmt: skip
         ax.annotate(name, (x, y), textcoords="offset points", xytext=(5, 4), fontsize=7)
     warn_few_objects(fig, n_objects)
-    return _finish(fig, ax, list(points.values()), "" if n_objects is None else f"run: n={n_objects} objects")
+    lows = [(c["lit_on_entry_interval_95"][0], points[n][1]) for n, c in controllers.items()
+            if n in points and c.get("lit_on_entry_interval_95") is not None]  # the bars' left ends in view
+    return _finish(fig, ax, list(points.values()) + lows, "" if n_objects is None else f"run: n={n_objects} objects")
 
 
 def sweep_frontier_figure(rows: Sequence[Mapping[str, str]]):

@@ -42,7 +42,8 @@ from detector.outdir import raise_if_terminated
 
 #: The keys of one controller's summary, in the order summary.json lists them.
 SUMMARY_KEYS = (
-    "controller", "energy_kwh", "savings_vs_always_on", "lit_on_entry_rate", "zone_entries",
+    "controller", "energy_kwh", "savings_vs_always_on", "lit_on_entry_rate", "lit_on_entry_interval_95",
+    "zone_entries",
     "dark_s_per_100_entries", "lag_p50_s", "lag_p95_s", "lag_max_s",
     "dark_exposure_s", "unlit_crossings", "switches", "on_time_s", "false_on_time_s",
     "energy_per_hour_kwh", "energy_split_kwh", "energy_per_lamp_kwh", "objects", "per_class", "detection",

@@ -18,13 +18,13 @@ lane and sidewalk edges).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
 import numpy as np
 
 from citysim.config.scenario import Scenario
 from citysim.config.year import YearSpec
+from citysim.metrics.intervals import lit_share_interval
 from citysim.year.table import ResponseTable
 from citysim.year.twilight import HourPiece
 
@@ -33,8 +33,6 @@ CLOCK_TOLERANCE = 1e-6
 #: Controllers that light every entry by their definition (always-on; the oracle, given approaches):
 #: an interval of their lit-on-entry rate would only say how little traffic the table saw.
 LIT_BY_DEFINITION = ("always_on", "oracle")
-#: Resamples behind the lit-on-entry interval, and the seed they are drawn with (same table, same interval).
-INTERVAL_RESAMPLES, INTERVAL_SEED = 2000, 20240611
 
 
 def lit_area_m2(scenario: Scenario, year: YearSpec) -> tuple[float, float, float]:
@@ -85,40 +83,12 @@ def level_weights(table: ResponseTable, pieces: list[tuple[HourPiece, int, float
 
 
 def lit_on_entry_interval(table: ResponseTable, label: str, weights: np.ndarray) -> tuple[float, float] | None:
-    """A 95 % interval of the year's lit-on-entry rate for ``label``: Wilson's score interval, its n
-    the number of independent entries the rate's spread amounts to. The spread comes from
-    resampling each level run's road users with replacement (a road user's entries go together:
-    one dark car may be dark in several zones); where every resample gives the same rate (no entry
-    dark, or none lit) it says nothing, and n is the number of road users. None without tallies."""
+    """A 95 % interval of the year's lit-on-entry rate for ``label`` from its level runs' road users
+    (``citysim.metrics.intervals``), each run weighted as the year weighs it; None without tallies."""
     tallies = [table.tallies.get(level, {}).get(label) for level in table.levels]
-    if any(t is None for t in tallies) or not any(t for t in tallies):
+    if any(t is None for t in tallies):
         return None
-    rng = np.random.default_rng(INTERVAL_SEED)
-    entries, lit = np.zeros(INTERVAL_RESAMPLES), np.zeros(INTERVAL_RESAMPLES)
-    rate_entries = rate_lit = 0.0
-    for weight, objects in zip(weights, tallies, strict=True):
-        if not objects:
-            continue
-        counts = np.asarray(objects, dtype=float)  # (road users, 2): entries, lit entries
-        rate_entries, rate_lit = rate_entries + weight * counts[:, 0].sum(), rate_lit + weight * counts[:, 1].sum()
-        picks = rng.integers(len(counts), size=(INTERVAL_RESAMPLES, len(counts)))
-        entries += weight * counts[picks, 0].sum(axis=1)
-        lit += weight * counts[picks, 1].sum(axis=1)
-    if rate_entries <= 0:
-        return None
-    rate = rate_lit / rate_entries
-    spread = float(np.var(lit[entries > 0] / entries[entries > 0]))
-    n = rate * (1.0 - rate) / spread if spread > 0 and 0 < rate < 1 else float(sum(len(t) for t in tallies))
-    return wilson_interval(rate, n)
-
-
-def wilson_interval(rate: float, n: float, z: float = 1.959964) -> tuple[float, float]:
-    """Wilson's score interval of a share ``rate`` out of ``n`` trials (95 % by default)."""
-    z2n = z * z / n
-    centre = (rate + z2n / 2.0) / (1.0 + z2n)
-    half = z * math.sqrt(rate * (1.0 - rate) / n + z2n / (4.0 * n)) / (1.0 + z2n)
-    # at a share of 0 or 1 the bound on that side is exactly it (the float sum can miss it by an ulp)
-    return (0.0 if rate <= 0.0 else max(0.0, centre - half)), (1.0 if rate >= 1.0 else min(1.0, centre + half))
+    return lit_share_interval(list(zip(weights.tolist(), tallies, strict=True)))
 
 
 def annual_figures(table: ResponseTable, pieces: list[tuple[HourPiece, int, float]], scenario: Scenario,

@@ -36,3 +36,15 @@ def test_a_sweep_draws_one_point_per_setting_and_skips_failed_rows():
     assert collection.get_label() == "pir (n=2)"
     plt.close(fig)
     assert sweep_frontier_figure(rows[2:]) is None
+
+
+def test_a_bar_through_a_point_spans_its_lit_on_entry_interval():
+    from matplotlib.collections import LineCollection
+
+    with_interval = {**CONTROLLERS, "pir": {**CONTROLLERS["pir"], "lit_on_entry_interval_95": [0.12, 0.31]}}
+    fig = frontier_figure(with_interval, n_objects=40)
+    (ax,) = fig.axes
+    bars = [seg for c in ax.collections if isinstance(c, LineCollection) for seg in c.get_segments()]
+    assert [np.asarray(seg).tolist() for seg in bars] == [[[0.12, 0.55], [0.31, 0.55]]]  # only pir has one
+    assert ax.get_xlim()[0] < 0.12  # the whole bar is in view
+    plt.close(fig)

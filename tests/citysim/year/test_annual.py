@@ -100,7 +100,7 @@ def _tallied_table(objects: list[tuple[int, int]]) -> ResponseTable:
 
 
 def test_the_lit_on_entry_interval_resamples_road_users_and_narrows_with_more_of_them(toy):
-    from citysim.year.annual import wilson_interval
+    from citysim.metrics.intervals import wilson_interval
 
     pieces = [(HourPiece(dt.date(2025, 1, 6), 22, 1.0), 1, 0.8), (HourPiece(dt.date(2025, 1, 7), 22, 1.0), 1, 1.6)]
 
@@ -119,14 +119,6 @@ def test_the_lit_on_entry_interval_resamples_road_users_and_narrows_with_more_of
     # everyone lit: resampling shows no spread, so the road users count as the trials (n = 50, not 150)
     lo, hi = figures([(3, 3)] * 50)["lit_on_entry_interval_95"]
     assert hi == 1.0 and lo == pytest.approx(wilson_interval(1.0, 50.0)[0]) and 0.9 < lo < 0.95
-
-
-def test_wilsons_interval_against_a_hand_computed_one():
-    from citysim.year.annual import wilson_interval
-
-    # 8 of 10: centre (0.8 + 0.192) / 1.384 = 0.7168, half 1.96 * sqrt(0.016 + 0.0096) / 1.384 = 0.2266
-    lo, hi = wilson_interval(0.8, 10.0)
-    assert lo == pytest.approx(0.4902, abs=2e-4) and hi == pytest.approx(0.9433, abs=2e-4)
 
 
 def test_the_level_weights_give_the_years_sums(toy):
