@@ -50,7 +50,7 @@ def lit_share_interval(samples: Sequence[tuple[float, Sequence[tuple[int, int]]]
         lit += weight * counts[picks, 1].sum(axis=1)
     if total_entries <= 0:
         return None
-    rate = total_lit / total_entries
+    rate = float(total_lit / total_entries)
     spread = float(np.var(lit[entries > 0] / entries[entries > 0]))
     n = rate * (1.0 - rate) / spread if spread > 0 and 0 < rate < 1 else float(road_users)
     return wilson_interval(rate, n)
