@@ -74,7 +74,7 @@ class ResponseTable:
     wall_s: float = 0.0
     #: per level run and controller, (zone entries, lit on entry) of each road user in its window:
     #: what the lit-on-entry interval resamples (``annual.lit_on_entry_interval``); not in year.json
-    tallies: dict[float, dict[str, list[tuple[int, int]]]] = field(default_factory=dict)
+    tallies: dict[float, dict[str, list[list[int]]]] = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {"reference_hour": self.reference_hour, "labels": self.labels,
@@ -107,11 +107,14 @@ def cell_variant(scenario: Scenario, cell: Cell) -> Scenario:
     return override(scenario, updates)
 
 
-def window_figures(folder: Path, labels: Sequence[str], t0_s: float, t1_s: float) -> dict[str, dict[str, float]]:
+def window_figures(folder: Path, labels: Sequence[str], t0_s: float,
+                   t1_s: float) -> tuple[dict[str, dict[str, float]], dict[str, list[list[int]]]]:  # fmt: skip
     """Per-hour figures of each controller inside [t0_s, t1_s) from a run folder's CSVs: energy from
     lamps.csv (power sampled each second), entries, lit entries and dark seconds of the zone entries
-    made inside the window from objects.csv."""
+    made inside the window from objects.csv; and, from the same rows, each road user's [zone entries,
+    entries lit on entry] per controller (what the lit-on-entry interval resamples)."""
     totals = {label: dict.fromkeys(FIGURES, 0.0) for label in labels}
+    tallies: dict[str, dict[str, list[int]]] = {label: {} for label in labels}
     with open(folder / "lamps.csv", newline="") as fh:
         for row in csv.DictReader(fh):
             if t0_s <= float(row["t_s"]) < t1_s:
@@ -120,37 +123,29 @@ def window_figures(folder: Path, labels: Sequence[str], t0_s: float, t1_s: float
         for row in csv.DictReader(fh):
             if t0_s <= float(row["t_enter_s"]) < t1_s:
                 t = totals[row["controller"]]
+                lit = int(row["lit_on_entry"])
                 t["zone_entries"] += 1
-                t["lit_entries"] += int(row["lit_on_entry"])
+                t["lit_entries"] += lit
                 t["dark_s"] += float(row["dark_s"] or 0.0)
-    per_hour = 3600.0 / (t1_s - t0_s)
-    return {label: {k: v * per_hour for k, v in figs.items()} for label, figs in totals.items()}
-
-
-def object_tallies(folder: Path, labels: Sequence[str], t0_s: float, t1_s: float) -> dict[str, list[tuple[int, int]]]:
-    """Per controller, each road user's (zone entries, entries lit on entry) made inside [t0_s, t1_s)."""
-    tallies: dict[str, dict[str, list[int]]] = {label: {} for label in labels}
-    with open(folder / "objects.csv", newline="") as fh:
-        for row in csv.DictReader(fh):
-            if t0_s <= float(row["t_enter_s"]) < t1_s:
                 counts = tallies[row["controller"]].setdefault(row["object_id"], [0, 0])
                 counts[0] += 1
-                counts[1] += int(row["lit_on_entry"])
-    return {label: [(e, lit) for e, lit in objects.values()] for label, objects in tallies.items()}
+                counts[1] += lit
+    per_hour = 3600.0 / (t1_s - t0_s)
+    figures = {label: {k: v * per_hour for k, v in figs.items()} for label, figs in totals.items()}
+    return figures, {label: list(objects.values()) for label, objects in tallies.items()}
 
 
 def run_cell(scenario: Scenario, cell: Cell, names: list[str] | None, fidelity: str,
              sensor_model=None) -> tuple[dict, dict]:  # fmt: skip
     """One run of the table (in a worker process): its per-hour figures per controller, and each
-    road user's entries and lit entries (``object_tallies``)."""
+    road user's entries and lit entries (``window_figures``)."""
     variant = cell_variant(scenario, cell)
     folder = Path(tempfile.mkdtemp(prefix="citysim-year-")) / "run"
     try:
         summary = run_comparison(variant, names, workers=1, fidelity=fidelity, out_dir=folder,
                                  sensor_model=sensor_model)  # fmt: skip
         labels = list(summary["controllers"])
-        return (window_figures(folder, labels, cell.warmup_s, cell.duration_s),
-                object_tallies(folder, labels, cell.warmup_s, cell.duration_s))
+        return window_figures(folder, labels, cell.warmup_s, cell.duration_s)
     finally:
         shutil.rmtree(folder.parent, ignore_errors=True)
 
