@@ -18,6 +18,7 @@ import numpy as np
 from citysim.config.kinds import TARGET_KINDS
 from citysim.control.base import ControlContext, Controller
 from citysim.world.agents import AgentState
+from citysim.world.approaches import oracle_lead_s
 from citysim.world.street import MAX_MASK_ZONES
 
 
@@ -30,9 +31,8 @@ class Oracle(Controller):
         super().__init__(ctx)
         self.zone_start_m = np.array([s.zone_start_m for s in ctx.street.lamps])
         self.zone_end_m = np.array([s.zone_end_m for s in ctx.street.lamps])
-        lum = ctx.luminaire
         # dim -> full takes (1 - dim) of a full swing; two of the world's steps of margin (it decides once a step)
-        self.lead_s = (1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 * ctx.physics_step_s
+        self.lead_s = oracle_lead_s(ctx.luminaire, ctx.physics_step_s)
         # replayed steps (``citysim.sim.recorded``): each step's zones needed, one numpy pass a chunk
         self._by_chunk = len(self.zone_start_m) <= MAX_MASK_ZONES
         self._needed_chunk: tuple[object, list[list[int]]] | None = None

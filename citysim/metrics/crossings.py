@@ -65,7 +65,7 @@ class CrossingsCollector(Collector):
             # level the object needs (None without entries)
             "lit_on_entry_rate": overall["lit_on_entry_fraction"],
             # how far that rate could be off from this night's road users alone (``metrics.intervals``)
-            "lit_on_entry_interval_95": lit_share_interval([(1.0, [tuple(t) for t in self.tallies.values()])]),
+            "lit_on_entry_interval_95": lit_share_interval([(1.0, list(self.tallies.values()))]),
             "zone_entries": entries,
             "dark_s_per_100_entries": 100.0 * overall["dark_exposure_total_s"] / entries if entries else None,
             "lag_p50_s": overall["lag_p50_s"],

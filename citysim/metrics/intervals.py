@@ -31,7 +31,7 @@ def wilson_interval(rate: float, n: float, z: float = Z_95) -> tuple[float, floa
     return (0.0 if rate <= 0.0 else max(0.0, centre - half)), (1.0 if rate >= 1.0 else min(1.0, centre + half))
 
 
-def lit_share_interval(samples: Sequence[tuple[float, Sequence[tuple[int, int]]]]) -> tuple[float, float] | None:
+def lit_share_interval(samples: Sequence[tuple[float, Sequence[Sequence[int]]]]) -> tuple[float, float] | None:
     """A 95 % interval of the share sum(w * lit) / sum(w * entries) over ``samples``, each a weight
     ``w`` and its road users' (zone entries, entries lit on entry); None without entries."""
     rng = np.random.default_rng(SEED)

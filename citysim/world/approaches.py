@@ -39,12 +39,17 @@ class Approaches:
                 "needed_m": round(self.needed_m, 2), "short_ends": self.short_ends}  # fmt: skip
 
 
+def oracle_lead_s(luminaire, physics_step_s: float) -> float:
+    """How long before a target enters a zone the oracle (``citysim.control.oracle``) brings its lamp
+    to full: the dim-to-full part of ``ramp_up_s`` plus two of the world's steps (it decides once a
+    step), s. Here, not in the oracle, because the approach a street needs is measured by it and the
+    world may not import the controllers; ``luminaire`` a ``LuminaireSpec``."""
+    return (1.0 - luminaire.dim_level) * luminaire.ramp_up_s + 2.0 * physics_step_s
+
+
 def approach_needed_m(scenario: Scenario) -> float:
-    """How far the fastest road user (60 km/h) goes while the oracle brings a lamp from dim to full
-    (its lead: the dim-to-full part of ``ramp_up_s`` plus two physics steps, as
-    ``citysim.control.oracle.Oracle.lead_s`` reckons it; the world may not import the controllers), m."""
-    lum = scenario.lamps.luminaire
-    return MAX_SPEED_MPS * ((1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 / scenario.physics_hz)
+    """How far the fastest road user (60 km/h) goes in the oracle's lead (``oracle_lead_s``), m."""
+    return MAX_SPEED_MPS * oracle_lead_s(scenario.lamps.luminaire, 1.0 / scenario.physics_hz)
 
 
 def approaches(scenario: Scenario) -> Approaches:
