@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from citysim.report.common import controller_color, plt, save, warn_few_objects
+from citysim.sim.compare import REFERENCE_CONTROLLERS
 
 #: The sentence a planner reads beside the plot.
 HOW_TO_READ = (
@@ -28,13 +29,12 @@ HOW_TO_READ = (
     "walked into the dark."
 )
 
-#: Controllers not drawn: always-on's gap is every lamp's whole dim saving, and the oracle's is 0.
-LEFT_OUT = ("always_on", "oracle")
 
 
 def oracle_gap_wh(controllers: Mapping[str, Mapping]) -> dict[str, list[float]] | None:
-    """Per controller of summary.json's ``controllers`` (but ``LEFT_OUT``): each lamp's energy minus
-    the oracle's at the same lamp, Wh, in lamp order. None without an oracle or per-lamp energies."""
+    """Per controller of summary.json's ``controllers`` but the references (always-on's gap is every
+    lamp's whole dim saving, the oracle's is 0): each lamp's energy minus the oracle's at the same
+    lamp, Wh, in lamp order. None without an oracle or per-lamp energies."""
     oracle = next((c for c in controllers.values() if c.get("controller") == "oracle"), None)
     if oracle is None or oracle.get("energy_per_lamp_kwh") is None:
         return None
@@ -42,7 +42,7 @@ def oracle_gap_wh(controllers: Mapping[str, Mapping]) -> dict[str, list[float]] 
     gaps = {}
     for label, figures in controllers.items():
         per_lamp = figures.get("energy_per_lamp_kwh")
-        if figures.get("controller", label) in LEFT_OUT or per_lamp is None or len(per_lamp) != len(bound_kwh):
+        if figures.get("controller", label) in REFERENCE_CONTROLLERS or per_lamp is None or len(per_lamp) != len(bound_kwh):
             continue
         gaps[label] = ((np.asarray(per_lamp, dtype=float) - bound_kwh) * 1000.0).tolist()
     return gaps or None

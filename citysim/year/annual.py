@@ -25,14 +25,12 @@ import numpy as np
 from citysim.config.scenario import Scenario
 from citysim.config.year import YearSpec
 from citysim.metrics.intervals import lit_share_interval
+from citysim.sim.compare import REFERENCE_CONTROLLERS
 from citysim.year.table import ResponseTable
 from citysim.year.twilight import HourPiece
 
 #: Idle energies of a controller that differ between clock hours by more than this share read the clock.
 CLOCK_TOLERANCE = 1e-6
-#: Controllers that light every entry by their definition (always-on; the oracle, given approaches):
-#: an interval of their lit-on-entry rate would only say how little traffic the table saw.
-LIT_BY_DEFINITION = ("always_on", "oracle")
 
 
 def lit_area_m2(scenario: Scenario, year: YearSpec) -> tuple[float, float, float]:
@@ -120,8 +118,10 @@ def annual_figures(table: ResponseTable, pieces: list[tuple[HourPiece, int, floa
             # a clock-read light at the reference hour says nothing of its other hours: no figure
             "lit_on_entry_rate": None if reads_clock or not totals["zone_entries"]
             else totals["lit_entries"] / totals["zone_entries"],
-            # how far the rate could be off from the table's few hundred entries alone
-            "lit_on_entry_interval_95": None if reads_clock or not totals["zone_entries"] or label in LIT_BY_DEFINITION
+            # how far the rate could be off from the table's few hundred entries alone; none for the
+            # references, which light every entry by definition (the oracle given approaches): theirs
+            # would only say how little traffic the table saw
+            "lit_on_entry_interval_95": None if reads_clock or not totals["zone_entries"] or label in REFERENCE_CONTROLLERS
             else lit_on_entry_interval(table, label, weights),
             "zone_entries_per_year": totals["zone_entries"],
             "dark_s_per_year": None if reads_clock else totals["dark_s"],
