@@ -38,7 +38,6 @@ from citysim.sim.cameras import film
 from citysim.sim.night import Night, build_night
 from citysim.sim.replay import TrafficReplay
 from detector.cliargs import did_you_mean
-from detector.outdir import raise_if_terminated
 
 #: The keys of one controller's summary, in the order summary.json lists them.
 SUMMARY_KEYS = (
@@ -102,20 +101,12 @@ def deliver_messages(night: Night, controller: Controller, lamp_index: int):
 
 def _run_clock(night: Night, collectors: Sequence[Collector], on_progress: Callable[[float], None] | None) -> None:
     """Run the clock to the scenario's end in whole seconds, telling the collectors each second."""
-    t_end = night.scenario.duration_s
-    t = 0.0
-    for collector in collectors:
-        collector.on_second(t)
-    while t < t_end - 1e-9:
-        t_next = min(t_end, t + 1.0)
-        night.run_until(t_next)
-        raise_if_terminated()  # a SIGTERM whose exception a C callback swallowed
-        if on_progress is not None:
-            on_progress(t_next - t)
-        t = t_next
-        if t < t_end - 1e-9:
-            for collector in collectors:
-                collector.on_second(t)
+
+    def on_second(t_s: float) -> None:
+        for collector in collectors:
+            collector.on_second(t_s)
+
+    night.run_whole_seconds(on_second, on_progress)
 
 
 def _fast_cameras(scenario: Scenario, spec: ControllerSpec, fidelity: str, sensor_model) -> bool:

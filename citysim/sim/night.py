@@ -30,6 +30,7 @@ from citysim.world.agents import AgentColumns, AgentState
 from citysim.world.physics import World
 from citysim.world.street import Street, build_street
 from citysim.world.traffic import start_traffic
+from detector.outdir import raise_if_terminated
 
 if TYPE_CHECKING:
     from citysim.render.camera import CameraRenderer
@@ -125,6 +126,22 @@ class Night:
         """Advance the clock to ``t_s`` (events at exactly ``t_s`` have not run yet)."""
         if t_s > self.env.now:
             self.env.run(until=t_s)
+
+    def run_whole_seconds(self, on_second: Callable[[float], None] | None = None,
+                          on_progress: Callable[[float], None] | None = None) -> None:  # fmt: skip
+        """Run the clock from 0 to the scenario's end one simulated second at a time:
+        ``on_second(t_s)`` before second ``t_s`` runs, ``on_progress(dt_s)`` after it. Between
+        seconds a SIGTERM whose exception a C callback (pymunk's) swallowed stops the run."""
+        t_s, t_end_s = 0.0, self.scenario.duration_s
+        while t_s < t_end_s - 1e-9:
+            if on_second is not None:
+                on_second(t_s)
+            t_next_s = min(t_end_s, t_s + 1.0)
+            self.run_until(t_next_s)
+            raise_if_terminated()
+            if on_progress is not None:
+                on_progress(t_next_s - t_s)
+            t_s = t_next_s
 
     @property
     def n_cameras(self) -> int:

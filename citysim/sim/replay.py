@@ -37,7 +37,6 @@ from citysim.config.scenario import Scenario
 from citysim.sim.night import build_night
 from citysim.sim.recorded import DYNAMIC_COLUMNS, RecordedAgents, RecordedChunk
 from citysim.world.agents import AgentColumns, AgentState
-from detector.outdir import raise_if_terminated
 
 #: physics steps per chunk file (60 s at 30 Hz): small enough to stream, few enough files
 CHUNK_STEPS = 1800
@@ -145,14 +144,7 @@ def record_traffic(
             steps[0] += 1
 
         night.start_physics(on_step, snapshots=False)  # the rows alone: a snapshot per agent was a quarter of the recorder's CPU
-        t, t_end = 0.0, scenario.duration_s
-        while t < t_end - 1e-9:  # whole seconds, as the run loop's clock does
-            t_next = min(t_end, t + 1.0)
-            night.run_until(t_next)
-            raise_if_terminated()  # a SIGTERM whose exception a C callback swallowed
-            if on_progress is not None:
-                on_progress(t_next - t)
-            t = t_next
+        night.run_whole_seconds(on_progress=on_progress)  # whole seconds, as the run loop's clock does
         writer.flush()
         _write_whole(folder / _DONE, {"steps": steps[0], "chunks": writer.index})
         return steps[0]
