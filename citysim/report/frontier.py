@@ -70,23 +70,53 @@ def frontier_figure(controllers: Mapping[str, Mapping], title: str = "savings vs
     return _finish(fig, ax, list(points.values()) + lows, "" if n_objects is None else f"run: n={n_objects} objects")
 
 
-def sweep_frontier_figure(rows: Sequence[Mapping[str, str]]):
-    """One point per controller and sweep setting (results.csv rows with status ok)."""
-    by_controller: dict[str, list[tuple[float, float]]] = {}
+def sweep_frontier_figure(rows: Sequence[Mapping[str, str]], axis: str | None = None):
+    """One point per controller and sweep setting (results.csv rows with status ok). With ``axis``
+    (the sweep's one varied axis), each controller's settings are averaged over the seeds and
+    joined in the axis' order, each point labelled with its value: the curve a knob traces."""
+    by_controller: dict[str, list[tuple[float, float, str]]] = {}
     for row in rows:
         try:
             x, y = float(row["lit_on_entry_rate"]), float(row["savings_vs_always_on"])
         except (KeyError, TypeError, ValueError):
             continue
         if row.get("status", "ok") == "ok":
-            by_controller.setdefault(row["controller"], []).append((x, y))
+            by_controller.setdefault(row["controller"], []).append((x, y, row.get(axis, "") if axis else ""))
     if not by_controller:
         return None
-    fig, ax = _axes("savings vs darkness, one point per sweep setting")
+    title = "savings vs darkness, one point per sweep setting" + (f" ({axis})" if axis else "")
+    fig, ax = _axes(title)
     order = list(by_controller)
+    drawn: list[tuple[float, float]] = []
     for name, pts in by_controller.items():
         oracle = name == "oracle"
-        ax.scatter([p[0] for p in pts], [p[1] for p in pts], s=60 if oracle else 25, marker="*" if oracle else "o",
-                   color="black" if oracle else controller_color(name, order), alpha=0.8,
-                   label=f"{name} (n={len(pts)})", zorder=3)  # fmt: skip
-    return _finish(fig, ax, [p for pts in by_controller.values() for p in pts], "n = sweep settings")
+        color = "black" if oracle else controller_color(name, order)
+        style = {"s": 60 if oracle else 25, "marker": "*" if oracle else "o", "color": color, "zorder": 3}
+        if axis is None:
+            ax.scatter([p[0] for p in pts], [p[1] for p in pts], alpha=0.8, label=f"{name} (n={len(pts)})", **style)
+            drawn += [(x, y) for x, y, _ in pts]
+            continue
+        curve = _setting_means(pts)
+        ax.plot([x for _, x, _ in curve], [y for _, _, y in curve], color=color, alpha=0.6, linewidth=1, zorder=2)
+        ax.scatter([x for _, x, _ in curve], [y for _, _, y in curve], label=name, **style)
+        for value, x, y in curve:
+            ax.annotate(value, (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6, color=color)
+        drawn += [(x, y) for _, x, y in curve]
+    return _finish(fig, ax, drawn, f"labels: {axis}, mean over seeds" if axis else "n = sweep settings")
+
+
+def _setting_means(points: Sequence[tuple[float, float, str]]) -> list[tuple[str, float, float]]:
+    """(setting, mean lit on entry, mean savings) per setting of ``points`` (x, y, setting), in
+    the settings' order (numeric where they are numbers)."""
+    by_setting: dict[str, list[tuple[float, float]]] = {}
+    for x, y, setting in points:
+        by_setting.setdefault(setting, []).append((x, y))
+
+    def key(setting: str) -> tuple[int, float, str]:
+        try:
+            return (0, float(setting), "")
+        except ValueError:
+            return (1, 0.0, setting)
+
+    return [(setting, sum(x for x, _ in xy) / len(xy), sum(y for _, y in xy) / len(xy))
+            for setting, xy in sorted(by_setting.items(), key=lambda item: key(item[0]))]  # fmt: skip

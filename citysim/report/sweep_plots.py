@@ -186,7 +186,7 @@ def plot_sweep(sweep_dir: str | Path) -> list[Path]:
                 notes.append(f"heatmap_{key}.png skipped: no controller reports {metric.title}")
             else:
                 paths.append(path)
-    frontier = sweep_frontier_figure(table.ok)
+    frontier = sweep_frontier_figure(table.ok, varied[0] if len(varied) == 1 else None)
     paths += [save(frontier, plot_dir / "frontier.png")] if frontier else []
     energy = plot_sweep_energy_per_hour(table, plot_dir / "energy_per_hour.png")
     paths += [energy] if energy else []

@@ -2,6 +2,7 @@
 
 import csv
 import io
+import math
 
 import pytest
 
@@ -44,6 +45,30 @@ def test_the_oracles_margin_is_two_of_the_worlds_steps(physics_hz):
     oracle = build_controller(build_night(scenario), ControllerSpec(name="oracle"))
     lum = scenario.lamps.luminaire
     assert oracle.lead_s == pytest.approx((1.0 - lum.dim_level) * lum.ramp_up_s + 2.0 / physics_hz, abs=1e-12)
+
+
+def test_the_oracle_reaches_as_far_as_a_road_user_setting_off_could_go():
+    # a car at 2.6 m/s a little short of a zone, setting off at its kind's greatest acceleration
+    # (1.5 m/s^2: the world's driver model never exceeds it), arrives sooner than its speed says
+    from citysim.config.kinds import AGENT_KINDS
+    from citysim.world.agents import AgentState
+
+    scenario = scenario_from_mapping(tiny_scenario())
+    oracle = build_controller(build_night(scenario), ControllerSpec(name="oracle"))
+    last = len(oracle.zone_start_m) - 1  # the tiny street's one zone; the car is short of it
+    zone_start_m, lead_s = float(oracle.zone_start_m[last]), oracle.lead_s
+    accel_mps2 = AGENT_KINDS["vehicle"].motion.accel_mps2
+    by_speed_m, by_accel_m = 2.6 * lead_s, 0.5 * accel_mps2 * lead_s**2
+    x_m = zone_start_m - by_speed_m - by_accel_m / 2  # beyond its speed's reach, within its acceleration's
+
+    def car(heading_rad):
+        return AgentState(object_id=1, cls="vehicle", x_m=x_m, y_m=-1.6, heading_rad=heading_rad, speed_mps=2.6,
+                          length_m=4.0, width_m=1.8, height_m=1.5)  # fmt: skip
+
+    assert last in oracle.zones_needed([car(0.0)]).tolist()
+    assert last not in oracle.zones_needed([car(math.pi)]).tolist()  # going away from that zone
+    assert last not in oracle.zones_needed([car(math.pi / 2)]).tolist()  # crossing: no way along x
+    assert zone_start_m - by_speed_m > x_m + 1e-6  # the speed alone would not have lit it
 
 
 def test_every_comparison_holds_always_on_and_the_oracle_first():

@@ -48,3 +48,20 @@ def test_a_bar_through_a_point_spans_its_lit_on_entry_interval():
     assert [np.asarray(seg).tolist() for seg in bars] == [[[0.12, 0.55], [0.31, 0.55]]]  # only pir has one
     assert ax.get_xlim()[0] < 0.12  # the whole bar is in view
     plt.close(fig)
+
+
+def test_a_one_axis_sweep_joins_each_controllers_settings_in_axis_order_averaged_over_seeds():
+    def row(controller, hold_s, seed, lit, saved):
+        return {"controller": controller, "status": "ok", "lamps.luminaire.hold_s": hold_s, "seed": seed,
+                "lit_on_entry_rate": str(lit), "savings_vs_always_on": str(saved)}  # fmt: skip
+
+    rows = [row("pir", "60", 1, 0.6, 0.30), row("pir", "5", 1, 0.1, 0.70), row("pir", "60", 2, 0.4, 0.40),
+            row("pir", "5", 2, 0.2, 0.60), row("pir", "20", 1, 0.3, 0.5)]  # fmt: skip
+    fig = sweep_frontier_figure(rows, "lamps.luminaire.hold_s")
+    (ax,) = fig.axes
+    (line,) = ax.get_lines()
+    # 5 < 20 < 60 as numbers (as text "20" < "5" < "60"), each the mean of its seeds
+    assert np.allclose(line.get_xydata(), [[0.15, 0.65], [0.3, 0.5], [0.5, 0.35]])
+    assert [t.get_text() for t in ax.texts if t.get_text() in {"5", "20", "60"}] == ["5", "20", "60"]
+    assert ax.get_legend().get_title().get_text() == "labels: lamps.luminaire.hold_s, mean over seeds"
+    plt.close(fig)
