@@ -99,8 +99,9 @@ def sweep_frontier_figure(rows: Sequence[Mapping[str, str]], axis: str | None = 
         curve = _setting_means(pts)
         ax.plot([x for _, x, _ in curve], [y for _, _, y in curve], color=color, alpha=0.6, linewidth=1, zorder=2)
         ax.scatter([x for _, x, _ in curve], [y for _, _, y in curve], label=name, **style)
-        for value, x, y in curve:
-            ax.annotate(value, (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6, color=color)
+        if len({(round(x, 4), round(y, 4)) for _, x, y in curve}) > 1:  # always_on's settings all sit at one spot
+            for value, x, y in curve:
+                ax.annotate(value, (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6, color=color)
         drawn += [(x, y) for _, x, y in curve]
     return _finish(fig, ax, drawn, f"labels: {axis}, mean over seeds" if axis else "n = sweep settings")
 
