@@ -1,12 +1,12 @@
 """The perfect-knowledge bound: lamps lit exactly where and when people are going to be.
 
 ``Oracle`` knows every road user's position and velocity. A lamp goes to full one ramp time
-before a target enters its zone (where its current velocity, and its kind's greatest
+before a target enters its zone (wherever its current velocity, and its kind's greatest
 acceleration, could take it within that time, plus two physics steps of margin, since it decides
 once a step) and stays lit while a target is in the zone, plus the hold time once the last one
-has left. The acceleration matters for a car setting off a few metres before a zone: at its
-current speed alone it would be judged to arrive later than it does (measured: a car stopped
-3 m short of a zone entered it 13 ms before its lamp was full, once in 12 whole nights). No controller can save more without
+has left. The acceleration matters for a car setting off a few metres before a zone: its speed
+alone says it arrives later than it does (measured: a car stopped 3 m short of a zone entered it
+13 ms before its lamp was full, once in 12 whole nights). No controller can save more without
 leaving someone in the dark: every run compares against it (``savings_vs_oracle``). It pays the
 sensing power like any smart lamp, so the bound is one a smart lamp could reach.
 """
