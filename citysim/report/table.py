@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from citysim.report.oracle_gap import gap_line
+from citysim.sim.compare import REFERENCE_CONTROLLERS
 from citysim.world.approaches import describe_short
 
 
@@ -14,23 +15,34 @@ def _num(value: float | None, fmt: str) -> str:
     return "-" if value is None else format(value, fmt)
 
 
+def _interval(c: dict) -> str:
+    """A controller's lit-on-entry 95 % interval as "lo-hi" %; "-" for the references, which light
+    every entry by definition, and where there is none."""
+    interval = c.get("lit_on_entry_interval_95")
+    if interval is None or c.get("controller") in REFERENCE_CONTROLLERS:
+        return "-"
+    return f"{100 * interval[0]:.1f}-{100 * interval[1]:.1f}"
+
+
 def comparison_table(summary: dict) -> str:
     """The planner's two axes first (savings against always-on and the oracle's bound; the share
     of zone entries already lit), then darkness, lag and energy spent on nobody."""
     head = (f"{'controller':<20} {'energy kWh':>10} {'savings':>8} {'vs oracle':>9} {'lit entry':>9} "
-            f"{'dark s/100':>10} {'lag p95 s':>9} {'unlit':>6} {'false on lamp-s':>15}")  # fmt: skip
+            f"{'95 % range':>11} {'dark s/100':>10} {'lag p95 s':>9} {'unlit':>6} {'false on lamp-s':>15}")  # fmt: skip
     lines = [f"{summary['scenario']}: {summary['duration_s']:.0f} s simulated, seed {summary['seed']}",
              head, "-" * len(head)]  # fmt: skip
     for name, c in summary["controllers"].items():
         lines.append(
             f"{name:<20} {c['energy_kwh']:>10.3f} {_pct(c['savings_vs_always_on']):>8} "
-            f"{_pct(c.get('savings_vs_oracle')):>9} {_pct(c.get('lit_on_entry_rate')):>9} "
+            f"{_pct(c.get('savings_vs_oracle')):>9} {_pct(c.get('lit_on_entry_rate')):>9} {_interval(c):>11} "
             f"{_num(c.get('dark_s_per_100_entries'), '10.1f'):>10} {_num(c['lag_p95_s'], '9.2f'):>9} "
             f"{c['unlit_crossings']:>6d} {c['false_on_time_s']:>15,.0f}"
         )
     lines.append("savings: energy saved against always-on lamps on the same night; vs oracle: that saving as a "
                  "share of the perfect-knowledge bound's; lit entry: share of zone entries whose lamp was "
-                 "already at full level; dark s/100: seconds spent in under-lit zones per 100 zone entries.")
+                 "already at full level; 95 % range: how far that share could be off from this run's road users "
+                 "alone (few road users, wide range); dark s/100: seconds spent in under-lit zones per 100 zone "
+                 "entries.")
     coverage = summary.get("coverage")
     if coverage:
         blind = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in coverage["blind_stretches_m"]) or "none"

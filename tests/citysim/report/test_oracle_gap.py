@@ -71,3 +71,14 @@ def test_the_tables_gap_line_names_the_lamp_of_the_best_controller_that_lights_n
         figures.update(energy_kwh=sum(figures["energy_per_lamp_kwh"]), lag_p95_s=0.0, unlit_crossings=0,
                        false_on_time_s=0.0)  # fmt: skip
     assert comparison_table(summary).endswith(line)
+
+
+def test_the_table_gives_each_sensing_controllers_lit_on_entry_range_and_none_for_the_references():
+    summary = {"scenario": "s", "duration_s": 60.0, "seed": 1, **gap_summary(0.98)}
+    for figures in summary["controllers"].values():
+        figures.update(energy_kwh=sum(figures["energy_per_lamp_kwh"]), lag_p95_s=0.0, unlit_crossings=0,
+                       false_on_time_s=0.0, lit_on_entry_interval_95=[0.9612, 0.9951])  # fmt: skip
+    rows = {line.split()[0]: line for line in comparison_table(summary).splitlines()[3:7]}
+    assert "96.1-99.5" in rows["detector_located"] and "96.1-99.5" in rows["pir"]
+    assert "96.1-99.5" not in rows["oracle"]  # the oracle lights every entry by definition
+    assert "95 % range: how far that share could be off" in comparison_table(summary)
