@@ -298,7 +298,7 @@ class DetectorLocated(DetectorPerFrame):
             track.observe(t_s, ground_x_m, d.velocity_x_mps)
             if track.vx_mps is not None and abs(track.vx_mps) > IMPLAUSIBLE_MPS:
                 continue  # nothing on the street moves like that: an insect at the lens, a flicker
-            track.prior_vx_mps = self.lane_prior_mps(cls, ground_y_m)
+            track.prior_vx_mps = self.lane_prior_mps(track.cls, ground_y_m)
             zones = self.zones_for(ground_x_m, track.heading_vx_mps, track.cls)
             self.light_zones(self.camera_lamps[camera_index], t_s, zones)
 

@@ -121,6 +121,28 @@ def test_a_car_on_the_lane_toward_the_camera_lights_the_zones_it_is_heading_into
     assert other.ctx.lamps[k].target_level < 1.0
 
 
+def test_a_car_seen_once_as_a_cyclist_keeps_the_cars_lane_prior_until_its_speed_is_measured():
+    # in glare a car's frame may say cyclist; the track keeps the class carried furthest (vehicle),
+    # and its lane prior must follow the track's class: at a cyclist's 6 m/s a lost car's extrapolated
+    # position fell behind the car and the zones it drove into stayed dim (fast mode, demo night, car 9)
+    from citysim.control.located import LANE_PRIOR_MPS
+
+    scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
+    night = build_night(scenario)
+    controller = build_controller(night, ControllerSpec(name="detector_located"))
+    k = 4
+    x_m = night.street.lamps[k].x_m + 20.0  # in zone k + 1, on the lane toward -x
+    for frame in range(PAPER_N):
+        controller.place(k, frame / 15, [vehicle_detection(x_m, 1.6)])
+    as_cyclist = Detection((150, 150, 40, 30), np.zeros(6), "cyclist", np.array([0.02, 0.02, 0.9, 0.03, 0.03]), 0.95,
+                           11, track_cls="cyclist", track_p_target=0.93, track_target=True, ground_x_m=x_m,
+                           ground_y_m=1.6)  # fmt: skip
+    controller.place(k, PAPER_N / 15, [as_cyclist])
+    track = controller.tracks[(k, 11)]
+    assert track.cls == "vehicle" and track.vx_mps is None
+    assert track.heading_vx_mps == -LANE_PRIOR_MPS["vehicle"]
+
+
 def test_the_first_lamp_whose_approach_no_camera_sees_is_kept_lit_and_only_it():
     scenario = load_scenario(REPO / "scenarios" / "suburban_night.yaml")
     controller = build_controller(build_night(scenario), ControllerSpec(name="detector_located"))
