@@ -14,6 +14,7 @@ import numpy as np
 
 from citysim.control.lamps import Lamp
 from citysim.metrics.collector import Collector
+from citysim.sim.frames import CameraFrames
 from citysim.world.street import Street
 
 
@@ -76,11 +77,12 @@ class CameraSchedule:
         return busy
 
 
-def film(night, renderers, controller, lamps: Sequence[Lamp], collectors: Sequence[Collector]):
+def film(night, frames: CameraFrames, controller, lamps: Sequence[Lamp], collectors: Sequence[Collector]):
     """simpy process: every camera frame at the cameras' frame rate, judged where scheduled.
 
-    Frames are taken at k / fps; a frame shows the agents of the latest physics step. The controller
-    and the collectors get the camera index (``Street.cameras``; camera i is lamp i's own).
+    Frames are taken at k / fps; a frame shows the agents of the latest physics step, rendered by
+    ``frames`` (or handed over by it, when controllers in step share them). The controller and the
+    collectors get the camera index (``Street.cameras``; camera i is lamp i's own).
     """
     env = night.env
     fps = night.street.lamps[0].camera.fps
@@ -92,7 +94,7 @@ def film(night, renderers, controller, lamps: Sequence[Lamp], collectors: Sequen
         levels = controller.ctx.lamp_states.levels_at(t)
         agents = night.agents
         for i in np.flatnonzero(schedule.active(k, t, agents, lamps, controller)):
-            frame = renderers[i].render(t, agents, levels, frame_index=k)
+            frame = frames.frame(int(i), k, t, agents, levels)
             detections = controller.on_frame(int(i), t, frame.image)
             for collector in collectors:
                 collector.on_frame(int(i), t, frame.truth, detections)

@@ -34,6 +34,7 @@ from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.calibration import sensor_model_for
 from citysim.sim.loop import check_controllers, check_fidelity, controller_spec, run_controller
 from citysim.sim.replay import record_traffic
+from citysim.sim.together import run_together
 from citysim.sim.workers import spawn_pool
 from citysim.world.approaches import approaches
 from citysim.world.coverage import camera_coverage
@@ -121,21 +122,74 @@ class _Batched:
 
 
 def _worker(args):
-    scenario, spec, part_dir, progress_queue, traffic, fidelity, sensor_model = args
+    """One task of a pool: the traffic recorder (no specs), one controller, or a group in step;
+    returns the summaries by display name."""
+    scenario, specs, part_dir, progress_queue, traffic, fidelity, sensor_model = args
     report = _Batched(progress_queue)
-    summary = run_to_files(scenario, spec, Path(part_dir), on_progress=report,
-                           traffic=None if traffic is None else Path(traffic), fidelity=fidelity,
-                           sensor_model=sensor_model)  # fmt: skip
+    traffic = None if traffic is None else Path(traffic)
+    if not specs:
+        record_traffic(scenario, traffic, on_progress=report)
+        summaries = {}
+    elif len(specs) > 1:
+        summaries = run_together(scenario, specs, Path(part_dir), traffic=traffic, on_progress=report)[0]
+    else:
+        summaries = {specs[0].display_name: run_to_files(scenario, specs[0], Path(part_dir), on_progress=report,
+                                                         traffic=traffic, fidelity=fidelity,
+                                                         sensor_model=sensor_model)}  # fmt: skip
     report.flush()
-    return spec.display_name, summary
+    return summaries
 
 
-def _record_worker(args):
-    scenario, traffic, progress_queue = args
-    report = _Batched(progress_queue)
-    record_traffic(scenario, Path(traffic), on_progress=report)
-    report.flush()
-    return None, None
+def _run_here(scenario, groups, parts, traffic, fidelity, sensor_model, bar) -> dict[str, dict]:
+    """The comparison's tasks one after the other in this process."""
+    if traffic is not None:
+        record_traffic(scenario, traffic, on_progress=bar.update)
+    results: dict[str, dict] = {}
+    for group in groups:
+        if len(group) > 1:
+            results.update(run_together(scenario, group, parts, traffic=traffic, on_progress=bar.update)[0])
+        else:
+            results[group[0].display_name] = run_to_files(scenario, group[0], parts, on_progress=bar.update,
+                                                          traffic=traffic, fidelity=fidelity,
+                                                          sensor_model=sensor_model)  # fmt: skip
+    return results
+
+
+def _run_in_pool(scenario, groups, parts, traffic, fidelity, sensor_model, bar, workers: int) -> dict[str, dict]:
+    """The comparison's tasks on ``workers`` processes, the traffic recorder first: the controllers
+    replay its chunks as it writes them."""
+    results: dict[str, dict] = {}
+    traffic_arg = None if traffic is None else str(traffic)
+    tasks = ([] if traffic is None else [[]]) + list(groups)  # [] is the recorder
+    with mp.Manager() as manager:
+        q = manager.Queue()
+        with spawn_pool(workers) as pool:
+            pending = {pool.submit(_worker, (scenario, group, str(parts), q, traffic_arg, fidelity, sensor_model))
+                       for group in tasks}  # fmt: skip
+            while pending:
+                try:
+                    bar.update(q.get(timeout=0.2))
+                except queue.Empty:
+                    pass
+                for f in [f for f in pending if f.done()]:
+                    pending.discard(f)
+                    results.update(f.result())
+            while not q.empty():
+                bar.update(q.get())
+    return results
+
+
+def run_groups(specs: Sequence[ControllerSpec], fidelity: str, workers: int, share_frames: bool) -> list[list[ControllerSpec]]:
+    """The comparison's tasks: each a list of controllers run together. At full fidelity with
+    ``share_frames``, the camera controllers are dealt into one group per worker, run in step,
+    sharing the frames they render alike (``citysim.sim.together``); every other controller runs
+    alone. Camera controllers come first: the cheap ones fill the gaps at the end."""
+    cameras = [s for s in specs if CONTROLLERS[s.name].uses_camera]
+    others = [[s] for s in specs if not CONTROLLERS[s.name].uses_camera]
+    if fidelity != "full" or not share_frames or len(cameras) < 2:
+        return [[s] for s in cameras] + others
+    n_groups = max(1, min(workers, len(cameras)))
+    return [cameras[g::n_groups] for g in range(n_groups)] + others
 
 
 def run_comparison(
@@ -150,6 +204,7 @@ def run_comparison(
     fidelity: str = "full",
     sensor_model=None,
     cache_dir: Path | None = None,
+    share_frames: bool = True,
 ) -> dict:
     """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
     (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
@@ -159,6 +214,8 @@ def run_comparison(
 
     ``fidelity`` "fast": cameras judged by the scenario's sensor model (``sensor_model``, else the
     one cached in ``cache_dir``, calibrated first if there is none; see ``citysim.sim.calibration``).
+    ``share_frames``: at full fidelity, run the camera controllers in step, a group per worker,
+    rendering a frame once for all of a group whose lamps stand alike (the same results, bit for bit).
     """
     specs = resolve_controllers(scenario, controllers)
     check_fidelity(fidelity)
@@ -175,38 +232,9 @@ def run_comparison(
         total_s = scenario.duration_s * (len(specs) + (traffic is not None))
         bar = tqdm(total=total_s, unit="sim s", desc=f"{scenario.name}: {len(specs)} controllers", disable=not progress,
                    bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
-        results: dict[str, dict] = {}
-        if workers == 1:
-            if traffic is not None:
-                record_traffic(scenario, traffic, on_progress=bar.update)
-            for spec in specs:
-                results[spec.display_name] = run_to_files(scenario, spec, parts, on_progress=bar.update,
-                                                          traffic=traffic, fidelity=fidelity,
-                                                          sensor_model=sensor_model)  # fmt: skip
-        else:
-            with mp.Manager() as manager:
-                q = manager.Queue()
-                with spawn_pool(workers) as pool:
-                    # camera controllers first: the cheap ones fill the gaps at the end
-                    heavy_first = sorted(specs, key=lambda s: not CONTROLLERS[s.name].uses_camera)
-                    # the recorder first: the controllers replay its chunks as it writes them
-                    futures = [] if traffic is None else [pool.submit(_record_worker, (scenario, str(traffic), q))]
-                    futures += [pool.submit(_worker, (scenario, spec, str(parts), q, traffic and str(traffic),
-                                                      fidelity, sensor_model))
-                                for spec in heavy_first]  # fmt: skip
-                    pending = set(futures)
-                    while pending:
-                        try:
-                            bar.update(q.get(timeout=0.2))
-                        except queue.Empty:
-                            pass
-                        for f in [f for f in pending if f.done()]:
-                            pending.discard(f)
-                            label, result = f.result()
-                            if label is not None:  # None: the traffic recorder
-                                results[label] = result
-                    while not q.empty():
-                        bar.update(q.get())
+        groups = run_groups(specs, fidelity, workers, share_frames)
+        tasks = (scenario, groups, parts, traffic, fidelity, sensor_model)
+        results = _run_here(*tasks, bar) if workers == 1 else _run_in_pool(*tasks, bar, workers)
         bar.close()
         results = with_savings_vs_oracle({spec.display_name: results[spec.display_name] for spec in specs})
         summary["controllers"] = results

@@ -35,6 +35,7 @@ from citysim.metrics.energy import EnergyCollector
 from citysim.metrics.false_on import FalseOnTime
 from citysim.metrics.lamp_log import LampLog
 from citysim.sim.cameras import film
+from citysim.sim.frames import CameraFrames
 from citysim.sim.night import Night, build_night
 from citysim.sim.replay import TrafficReplay
 from detector.cliargs import did_you_mean
@@ -99,16 +100,6 @@ def deliver_messages(night: Night, controller: Controller, lamp_index: int):
         controller.on_message(lamp_index, night.env.now, message)
 
 
-def _run_clock(night: Night, collectors: Sequence[Collector], on_progress: Callable[[float], None] | None) -> None:
-    """Run the clock to the scenario's end in whole seconds, telling the collectors each second."""
-
-    def on_second(t_s: float) -> None:
-        for collector in collectors:
-            collector.on_second(t_s)
-
-    night.run_whole_seconds(on_second, on_progress)
-
-
 def _fast_cameras(scenario: Scenario, spec: ControllerSpec, fidelity: str, sensor_model) -> bool:
     """Whether the run's cameras are judged by the sensor model; refuses what fast mode cannot run."""
     check_controllers([spec.name])
@@ -128,17 +119,21 @@ def run_controller(
     scenario: Scenario,
     spec: ControllerSpec,
     *,
-    lamps_writer: csv.writer | None = None,
-    objects_writer: csv.writer | None = None,
     on_progress: Callable[[float], None] | None = None,
-    traffic: Path | None = None,
-    fidelity: str = "full",
-    sensor_model=None,
-    sensors: object | None = None,
-    observers: Sequence[Collector] = (),
-    lamps_held_dim: bool = False,
+    **options,
 ) -> dict:
     """Simulate the scenario's night under one controller; returns its summary (summary.json entry).
+
+    ``options`` are ``ControllerRun``'s; ``on_progress(dt_s)`` after each simulated second.
+    """
+    run = ControllerRun(scenario, spec, **options)
+    run.night.run_whole_seconds(run.on_second, on_progress)
+    return run.summary()
+
+
+class ControllerRun:
+    """One controller's night, set up and ready to run: ``night.run_whole_seconds(on_second)``
+    runs it alone; ``citysim.sim.together`` runs several a second at a time, sharing frames.
 
     ``traffic``: a folder of this scenario's recorded traffic (``citysim.sim.replay``) to replay
     instead of stepping the world; the agents, and so the summary, are the same bit for bit.
@@ -147,58 +142,85 @@ def run_controller(
     (calibration records them); ``observers`` are extra collectors (calibration's recorder);
     ``lamps_held_dim``: the controller's triggers (``LampBank.trigger``, how every controller but the
     clock schedules lights a lamp) change no level, so the lamps stay dim (calibration's quiet nights).
+    ``frames``: where full fidelity's camera frames come from (default: this night's own renderers).
     """
-    fast_cameras = _fast_cameras(scenario, spec, fidelity, sensor_model)
-    night = build_night(scenario, replay=None if traffic is None else TrafficReplay(traffic))
-    if fast_cameras:
-        from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
 
-        # each controller draws from the fit on the decisions it counts (insects seldom make a target track)
-        model = sensor_model.for_decisions(CONTROLLERS[spec.name].decisions(spec))
-        sensors = fast_sensors(night, model)
-    controller = build_controller(night, spec, sensors)
-    controller.bank.held_dim = lamps_held_dim
-    lamps, label = controller.ctx.lamps, spec.display_name
-    collectors: list[Collector] = [
-        # the per-class figures list the detector's own classes always, other kinds when present
-        CrossingsCollector(night.street, label, objects_writer, scenario.traffic.reported_kinds()),
-        FalseOnTime(night.street, controller.ctx.dim_level, night.physics_dt_s),
-        ConfusionCollector(),
-        EnergyCollector(lamps, controller.ctx.luminaire),
-        LampLog(label, lamps, lamps_writer),
-        *observers,
-    ]
-
-    lamp_states = controller.ctx.lamp_states
-    # the base Collector's hooks do nothing: only the collectors that override one are called
-    step_collectors = overriding(collectors, "on_step")
-    frame_collectors = overriding(collectors, "on_frame")
-
-    def after_step(t_s: float, agents) -> None:
-        levels = lamp_states.levels_at(t_s)
-        for collector in step_collectors:
-            collector.on_step(t_s, agents, levels)
-        controller.on_physics_step(t_s, agents)
-
-    night.start_physics(after_step)
-    if controller.uses_camera:
-        # frames come half a physics step after the physics tick they show, so both orderings agree
+    def __init__(
+        self,
+        scenario: Scenario,
+        spec: ControllerSpec,
+        *,
+        lamps_writer: csv.writer | None = None,
+        objects_writer: csv.writer | None = None,
+        traffic: Path | None = None,
+        fidelity: str = "full",
+        sensor_model=None,
+        sensors: object | None = None,
+        observers: Sequence[Collector] = (),
+        lamps_held_dim: bool = False,
+        frames: CameraFrames | None = None,
+    ) -> None:
+        fast_cameras = _fast_cameras(scenario, spec, fidelity, sensor_model)
+        self.scenario, self.spec = scenario, spec
+        self.night = night = build_night(scenario, replay=None if traffic is None else TrafficReplay(traffic))
         if fast_cameras:
-            from citysim.fast.sense import sense
+            from citysim.fast.sense import fast_sensors  # the detector's classes: camera runs only
 
-            night.env.process(sense(night, sensors, controller, lamps, frame_collectors))
-        else:
-            night.env.process(film(night, night.renderers(), controller, lamps, frame_collectors))
-    for i in range(len(lamps)):
-        night.env.process(deliver_messages(night, controller, i))
-    _run_clock(night, overriding(collectors, "on_second"), on_progress)
+            # each controller draws from the fit on the decisions it counts (insects seldom make a target track)
+            model = sensor_model.for_decisions(CONTROLLERS[spec.name].decisions(spec))
+            sensors = fast_sensors(night, model)
+        self.controller = controller = build_controller(night, spec, sensors)
+        controller.bank.held_dim = lamps_held_dim
+        lamps, label = controller.ctx.lamps, spec.display_name
+        self.collectors: list[Collector] = [
+            # the per-class figures list the detector's own classes always, other kinds when present
+            CrossingsCollector(night.street, label, objects_writer, scenario.traffic.reported_kinds()),
+            FalseOnTime(night.street, controller.ctx.dim_level, night.physics_dt_s),
+            ConfusionCollector(),
+            EnergyCollector(lamps, controller.ctx.luminaire),
+            LampLog(label, lamps, lamps_writer),
+            *observers,
+        ]
+        # the base Collector's hooks do nothing: only the collectors that override one are called
+        self._second_collectors = overriding(self.collectors, "on_second")
+        night.start_physics(self._after_step_hook())
+        if controller.uses_camera:
+            frame_collectors = overriding(self.collectors, "on_frame")
+            # frames come half a physics step after the physics tick they show, so both orderings agree
+            if fast_cameras:
+                from citysim.fast.sense import sense
 
-    t_end = scenario.duration_s
-    figures: dict[str, Any] = {"controller": spec.name}
-    for collector in collectors:
-        figures.update(collector.finish(t_end))
-    figures.update(_controller_figures(controller, night))
-    return {key: figures[key] for key in SUMMARY_KEYS}
+                night.env.process(sense(night, sensors, controller, lamps, frame_collectors))
+            else:
+                frames = frames if frames is not None else CameraFrames(night.renderers())
+                night.env.process(film(night, frames, controller, lamps, frame_collectors))
+        for i in range(len(lamps)):
+            night.env.process(deliver_messages(night, controller, i))
+
+    def _after_step_hook(self) -> Callable[[float, Any], None]:
+        lamp_states, controller = self.controller.ctx.lamp_states, self.controller
+        step_collectors = overriding(self.collectors, "on_step")
+
+        def after_step(t_s: float, agents) -> None:
+            levels = lamp_states.levels_at(t_s)
+            for collector in step_collectors:
+                collector.on_step(t_s, agents, levels)
+            controller.on_physics_step(t_s, agents)
+
+        return after_step
+
+    def on_second(self, t_s: float) -> None:
+        """Before second ``t_s`` runs: the collectors that count seconds (lamps.csv, hourly energy)."""
+        for collector in self._second_collectors:
+            collector.on_second(t_s)
+
+    def summary(self) -> dict:
+        """The run's summary.json entry, once the clock has reached the scenario's end."""
+        figures: dict[str, Any] = {"controller": self.spec.name}
+        for collector in self.collectors:
+            figures.update(collector.finish(self.scenario.duration_s))
+        figures.update(_controller_figures(self.controller, self.night))
+        return {key: figures[key] for key in SUMMARY_KEYS}
 
 
 def _controller_figures(controller: Controller, night: Night) -> dict[str, Any]:

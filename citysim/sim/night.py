@@ -132,16 +132,22 @@ class Night:
         """Run the clock from 0 to the scenario's end one simulated second at a time:
         ``on_second(t_s)`` before second ``t_s`` runs, ``on_progress(dt_s)`` after it. Between
         seconds a SIGTERM whose exception a C callback (pymunk's) swallowed stops the run."""
-        t_s, t_end_s = 0.0, self.scenario.duration_s
-        while t_s < t_end_s - 1e-9:
-            if on_second is not None:
-                on_second(t_s)
-            t_next_s = min(t_end_s, t_s + 1.0)
-            self.run_until(t_next_s)
-            raise_if_terminated()
+        t_s = 0.0
+        while t_s < self.scenario.duration_s - 1e-9:
+            t_next_s = self.run_second(t_s, on_second)
             if on_progress is not None:
                 on_progress(t_next_s - t_s)
             t_s = t_next_s
+
+    def run_second(self, t_s: float, on_second: Callable[[float], None] | None = None) -> float:
+        """One step of ``run_whole_seconds``: ``on_second(t_s)``, then the clock to the next whole
+        second (or the end); returns that time. Runs in step call it for each night in turn."""
+        if on_second is not None:
+            on_second(t_s)
+        t_next_s = min(self.scenario.duration_s, t_s + 1.0)
+        self.run_until(t_next_s)
+        raise_if_terminated()
+        return t_next_s
 
     @property
     def n_cameras(self) -> int:

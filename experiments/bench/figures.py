@@ -298,6 +298,12 @@ def bench_night_sample() -> dict:
     return bench_night_full_hours()
 
 
+def bench_shared_frames() -> dict:
+    from experiments.bench.night import bench_shared_frames as shared
+
+    return shared()
+
+
 def bench_night_fast() -> dict:
     from experiments.bench.night import bench_night_fast as fast
 
@@ -322,8 +328,8 @@ def bench_year_fast() -> dict:
     return bench_year()
 
 
-SECTIONS = (bench_detector, bench_render, bench_sim, bench_traffic, bench_sweep, bench_night_sample, bench_night_fast,
-            bench_night_fast_whole, bench_year_fast)
+SECTIONS = (bench_detector, bench_render, bench_sim, bench_traffic, bench_sweep, bench_night_sample, bench_shared_frames,
+            bench_night_fast, bench_night_fast_whole, bench_year_fast)
 
 
 def main(argv: list[str] | None = None) -> int:

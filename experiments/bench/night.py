@@ -163,3 +163,27 @@ def bench_night_hours(fidelity: str, sample_s: float, workers: int, scenario_pat
           f"(scaled from the hourly samples); {before}")
     return {"fidelity": fidelity, "sample_s": sample_s, "hours": per_hour, "whole_night_wall_s": wall,
             "whole_night_cpu_s": cpu}  # fmt: skip
+
+
+#: simulated seconds of each hour the shared-frames A/B runs, and the hours it samples (22:00, 02:00)
+SHARED_SAMPLE_S, SHARED_HOURS = 120.0, (0, 4)
+
+
+def bench_shared_frames(sample_s: float = SHARED_SAMPLE_S, workers: int = 2, scenario_path: Path = SUBURBAN) -> dict:
+    """Full fidelity, every controller, with and without the camera controllers sharing their frames
+    (``run_comparison(share_frames=...)``), alternating, at the busy 22:00 and the quiet 02:00: the
+    floor (each controller alone) is measured in the same run, on the same traffic."""
+    base = load_scenario(scenario_path)
+    print(f"== shared frames, full fidelity: {base.name}, every controller, {sample_s:.0f} sim s, {workers} workers, "
+          f"each controller alone (before) against the camera controllers in step (now) ==")
+    out = []
+    for hour in SHARED_HOURS:
+        scenario = night_hour(base, hour, sample_s)
+        alone = timed_comparison(scenario, workers, share_frames=False, progress=False)
+        shared = timed_comparison(scenario, workers, share_frames=True, progress=False)
+        print(f"  {(base.start_hour + hour) % 24:02.0f}:00: alone {alone[0]:.0f} s wall, {alone[1]:.0f} CPU-s; "
+              f"in step {shared[0]:.0f} s wall, {shared[1]:.0f} CPU-s ({1 - shared[1] / alone[1]:+.0%} CPU less)",
+              flush=True)  # fmt: skip
+        out.append({"hour": hour, "alone_wall_s": alone[0], "alone_cpu_s": alone[1],
+                    "shared_wall_s": shared[0], "shared_cpu_s": shared[1]})  # fmt: skip
+    return {"sample_s": sample_s, "hours": out}
