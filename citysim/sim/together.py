@@ -4,9 +4,12 @@ Rendering is about two fifths of a full-fidelity camera controller's time (the r
 detector), and every camera controller of a comparison films the same street on the same
 clock. Run a second at a time, one controller after the other, they ask for the same frames
 within the same second, and ``CameraFrames.shared`` renders a frame once for all of those
-whose lamps stand at the same levels (at night's quiet hours, nearly all of them). Each
-controller's summary, lamps.csv and objects.csv are those of its run alone, bit for bit
-(``tests/citysim/sim/test_together.py``).
+whose lamps all stand at the same levels. Each controller's summary, lamps.csv and objects.csv
+are those of its run alone, bit for bit (``tests/citysim/sim/test_together.py``). How much it
+saves depends on how alike the controllers light: the six camera controllers of suburban_night
+in one group at 02:00 asked for 10,532 frames over 120 s and 1,760 (17 %) were shared; each
+controller's lamps differ somewhere most of the time (``detector_located`` keeps the first lamp
+at full all night), and any difference, however far, makes a frame another's.
 """
 
 from __future__ import annotations

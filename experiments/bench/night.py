@@ -182,7 +182,7 @@ def bench_shared_frames(sample_s: float = SHARED_SAMPLE_S, workers: int = 2, sce
         alone = timed_comparison(scenario, workers, share_frames=False, progress=False)
         shared = timed_comparison(scenario, workers, share_frames=True, progress=False)
         print(f"  {(base.start_hour + hour) % 24:02.0f}:00: alone {alone[0]:.0f} s wall, {alone[1]:.0f} CPU-s; "
-              f"in step {shared[0]:.0f} s wall, {shared[1]:.0f} CPU-s ({1 - shared[1] / alone[1]:+.0%} CPU less)",
+              f"in step {shared[0]:.0f} s wall, {shared[1]:.0f} CPU-s ({100 * (1 - shared[1] / alone[1]):.1f} % less CPU)",
               flush=True)  # fmt: skip
         out.append({"hour": hour, "alone_wall_s": alone[0], "alone_cpu_s": alone[1],
                     "shared_wall_s": shared[0], "shared_cpu_s": shared[1]})  # fmt: skip
