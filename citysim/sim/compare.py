@@ -204,7 +204,7 @@ def run_comparison(
     fidelity: str = "full",
     sensor_model=None,
     cache_dir: Path | None = None,
-    share_frames: bool = True,
+    share_frames: bool = False,
 ) -> dict:
     """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
     (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
@@ -215,7 +215,8 @@ def run_comparison(
     ``fidelity`` "fast": cameras judged by the scenario's sensor model (``sensor_model``, else the
     one cached in ``cache_dir``, calibrated first if there is none; see ``citysim.sim.calibration``).
     ``share_frames``: at full fidelity, run the camera controllers in step, a group per worker,
-    rendering a frame once for all of a group whose lamps stand alike (the same results, bit for bit).
+    rendering a frame once for all of a group whose lamps stand alike (the same results, bit for
+    bit). Off by default: on suburban_night it saves renders but not time (README, "Speed").
     """
     specs = resolve_controllers(scenario, controllers)
     check_fidelity(fidelity)

@@ -12,8 +12,7 @@ The key is every lamp's level, not only the levels of the lamps near the camera:
 shades the background and the agents with every lamp whose light reaches the view (on
 suburban_night every lamp reaches every camera's view, if only by a fraction of a grey level),
 and a shared frame must be the frame the controller would have rendered itself, to the last bit.
-So frames are shared where the controllers' lamps all stand alike: in the quiet hours, when
-every lamp is dim, and seldom in busy ones. A shared frame is read-only, so a
+So frames are shared only where the controllers' lamps all stand alike. A shared frame is read-only, so a
 detector that wrote into its input would fail loudly instead of changing another's frame.
 """
 

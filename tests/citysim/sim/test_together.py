@@ -36,9 +36,9 @@ def test_controllers_in_step_share_frames_where_their_lamps_stand_alike_and_only
 @pytest.mark.slow
 def test_sharing_frames_leaves_every_summary_and_row_as_each_controller_alone(tmp_path):
     scenario = small_busy_street(20.0)
-    run_comparison(scenario, CAMERA_CONTROLLERS, out_dir=tmp_path / "alone", share_frames=False)
-    run_comparison(scenario, CAMERA_CONTROLLERS, out_dir=tmp_path / "one_group")
-    run_comparison(scenario, CAMERA_CONTROLLERS, out_dir=tmp_path / "two_groups", workers=2)
+    run_comparison(scenario, CAMERA_CONTROLLERS, out_dir=tmp_path / "alone")  # the default
+    run_comparison(scenario, CAMERA_CONTROLLERS, out_dir=tmp_path / "one_group", share_frames=True)
+    run_comparison(scenario, CAMERA_CONTROLLERS, out_dir=tmp_path / "two_groups", workers=2, share_frames=True)
     summary, lamps, objects = read_run(tmp_path / "alone")
     controllers = summary["controllers"]
     assert controllers["detector"]["switches"] > 0  # lamps changed level, and not alike for all:
