@@ -35,7 +35,7 @@ from citysim.metrics.energy import EnergyCollector
 from citysim.metrics.false_on import FalseOnTime
 from citysim.metrics.lamp_log import LampLog
 from citysim.sim.cameras import film
-from citysim.sim.frames import CameraFrames
+from citysim.sim.frames import CameraFrames, SharedFrames
 from citysim.sim.night import Night, build_night
 from citysim.sim.replay import TrafficReplay
 from detector.cliargs import did_you_mean
@@ -142,7 +142,8 @@ class ControllerRun:
     (calibration records them); ``observers`` are extra collectors (calibration's recorder);
     ``lamps_held_dim``: the controller's triggers (``LampBank.trigger``, how every controller but the
     clock schedules lights a lamp) change no level, so the lamps stay dim (calibration's quiet nights).
-    ``frames``: where full fidelity's camera frames come from (default: this night's own renderers).
+    ``shared_frames``: full fidelity's camera frames are taken from, and given to, the frames of
+    the controllers run in step with this one (``citysim.sim.together``).
     """
 
     def __init__(
@@ -158,7 +159,7 @@ class ControllerRun:
         sensors: object | None = None,
         observers: Sequence[Collector] = (),
         lamps_held_dim: bool = False,
-        frames: CameraFrames | None = None,
+        shared_frames: SharedFrames | None = None,
     ) -> None:
         fast_cameras = _fast_cameras(scenario, spec, fidelity, sensor_model)
         self.scenario, self.spec = scenario, spec
@@ -192,7 +193,7 @@ class ControllerRun:
 
                 night.env.process(sense(night, sensors, controller, lamps, frame_collectors))
             else:
-                frames = frames if frames is not None else CameraFrames(night.renderers())
+                frames = CameraFrames(night.renderers(), shared_frames)
                 night.env.process(film(night, frames, controller, lamps, frame_collectors))
         for i in range(len(lamps)):
             night.env.process(deliver_messages(night, controller, i))

@@ -3,17 +3,18 @@
 Rendering is about two fifths of a full-fidelity camera controller's time (the rest is the
 detector), and every camera controller of a comparison films the same street on the same
 clock. Run a second at a time, one controller after the other, they ask for the same frames
-within the same second, and ``CameraFrames.shared`` renders a frame once for all of those
-whose lamps all stand at the same levels. Each controller's summary, lamps.csv and objects.csv
-are those of its run alone, bit for bit (``tests/citysim/sim/test_together.py``).
+within the same second, and ``citysim.sim.frames.SharedFrames`` hands a frame rendered for one
+to all of those whose lamps all stand at the same levels. Each controller's summary, lamps.csv
+and objects.csv are those of its run alone, bit for bit (``tests/citysim/sim/test_together.py``).
 
-Measured on suburban_night it saves renders but not time, so ``run_comparison`` runs it only
-when asked (``share_frames=True``). Each controller's lamps differ somewhere most of the time
+Measured on suburban_night it saves no time, so ``run_comparison`` runs it only when asked
+(``share_frames=True``). Each controller's lamps differ somewhere most of the time
 (``detector_located`` keeps the first lamp at full all night), and any difference, however far,
 makes a frame another's: at 02:00 seven camera controllers asked for 12,034 frames over 120 s,
-and in one group 27 % were shared. Yet four camera controllers over 200 s at 23:00 took the same
-CPU in step as one after the other in one process (34.0 and 34.6 against 34.0 and 33.1 CPU-s,
-25 % of their frames shared), and every controller on 2 workers 8 % more (300 s at 23:00).
+and in one group 27 % were shared. The frames shared are the cheap ones (an empty street under
+the still view a renderer keeps): four camera controllers over 200 s at 23:00 rendered 8,064
+frames in 5.9 CPU-s in step against 10,741 in 6.5 CPU-s one after the other, 33.9 against
+34.4 CPU-s in all.
 """
 
 from __future__ import annotations
@@ -24,9 +25,8 @@ from contextlib import ExitStack
 from pathlib import Path
 
 from citysim.config.scenario import ControllerSpec, Scenario
-from citysim.sim.frames import CameraFrames
+from citysim.sim.frames import SharedFrames
 from citysim.sim.loop import ControllerRun
-from citysim.sim.night import build_night
 
 
 def run_together(
@@ -36,7 +36,7 @@ def run_together(
     *,
     traffic: Path | None = None,
     on_progress: Callable[[float], None] | None = None,
-) -> tuple[dict[str, dict], CameraFrames]:
+) -> tuple[dict[str, dict], SharedFrames]:
     """Every controller of ``specs`` at full fidelity on the scenario's night, a simulated second
     at a time, each writing its part of lamps.csv / objects.csv into ``part_dir`` (as
     ``citysim.sim.compare.run_to_files`` does) and replaying ``traffic`` if given. Returns the
@@ -44,8 +44,7 @@ def run_together(
     ``on_progress(dt_s)`` after each controller's second.
     """
     part_dir.mkdir(parents=True, exist_ok=True)
-    # the renderers of any night of this scenario: their seeds come from the scenario's seed
-    frames = CameraFrames(build_night(scenario).renderers(), shared=True)
+    frames = SharedFrames()
     with ExitStack() as files:
         runs = []
         for spec in specs:
@@ -54,7 +53,7 @@ def run_together(
             objects_file = files.enter_context(open(part_dir / f"{label}.objects.csv", "w", newline=""))
             runs.append(ControllerRun(scenario, spec, lamps_writer=csv.writer(lamps_file),
                                       objects_writer=csv.writer(objects_file), traffic=traffic,
-                                      fidelity="full", frames=frames))  # fmt: skip
+                                      fidelity="full", shared_frames=frames))  # fmt: skip
         t_s = 0.0
         while t_s < scenario.duration_s - 1e-9:
             for run in runs:

@@ -5,7 +5,7 @@ import pytest
 
 from citysim.config.scenario import ControllerSpec, scenario_from_mapping
 from citysim.sim.compare import run_comparison, run_groups
-from citysim.sim.frames import CameraFrames
+from citysim.sim.frames import CameraFrames, SharedFrames
 from citysim.sim.night import build_night
 from citysim.sim.replay import record_traffic
 from citysim.sim.together import run_together
@@ -48,22 +48,26 @@ def test_sharing_frames_leaves_every_summary_and_row_as_each_controller_alone(tm
         assert read_run(tmp_path / shared) == (summary, lamps, objects)  # every value, every row
 
 
-def test_a_shared_frame_is_the_renderers_own_frame_and_read_only():
+def test_a_shared_frame_is_the_one_each_controller_would_render_and_read_only():
     scenario = small_busy_street(2.0)
-    night = build_night(scenario)
     levels = [0.2, 1.0]
-    shared = CameraFrames(build_night(scenario).renderers(), shared=True)
-    first = shared.frame(0, 7, 7 / 15, [], levels)
-    again = shared.frame(0, 7, 7 / 15, [], [0.2, 1.0])
-    other = shared.frame(0, 7, 7 / 15, [], [0.2, 0.2])
+    shared = SharedFrames()
+    # two controllers' frames: each its own renderers, one cache
+    mine = CameraFrames(build_night(scenario).renderers(), shared)
+    yours = CameraFrames(build_night(scenario).renderers(), shared)
+    first = mine.frame(0, 7, 7 / 15, [], levels)
+    again = yours.frame(0, 7, 7 / 15, [], [0.2, 1.0])
+    other = yours.frame(0, 7, 7 / 15, [], [0.2, 0.2])
     assert again is first and other is not first
     assert (shared.rendered, shared.reused) == (2, 1)
-    own = night.renderer(0).render(7 / 15, [], levels, frame_index=7)
+    own = build_night(scenario).renderer(0).render(7 / 15, [], levels, frame_index=7)
     assert np.array_equal(first.image, own.image) and first.truth == own.truth
     with pytest.raises(ValueError, match="read-only"):
         first.image[0, 0] = 0
     shared.next_second()
-    assert shared.frame(0, 7, 7 / 15, [], levels) is not first
+    assert yours.frame(0, 7, 7 / 15, [], levels) is not first
+    alone = CameraFrames(build_night(scenario).renderers())  # no cache: every frame rendered
+    assert alone.frame(0, 7, 7 / 15, [], levels) is not alone.frame(0, 7, 7 / 15, [], levels)
 
 
 def test_the_camera_controllers_are_dealt_into_one_group_per_worker_at_full_fidelity_only():
