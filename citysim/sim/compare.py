@@ -32,7 +32,7 @@ from citysim.control.registry import CONTROLLERS
 from citysim.metrics.crossings import OBJECTS_CSV_HEADER
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.calibration import sensor_model_for
-from citysim.sim.loop import check_controllers, check_fidelity, controller_spec, run_controller
+from citysim.sim.loop import check_controllers, check_fidelity, controller_spec
 from citysim.sim.replay import record_traffic
 from citysim.sim.together import run_together
 from citysim.sim.workers import spawn_pool
@@ -84,19 +84,6 @@ def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
     return out
 
 
-def run_to_files(scenario: Scenario, spec: ControllerSpec, part_dir: Path, on_progress=None,
-                 traffic: Path | None = None, fidelity: str = "full", sensor_model=None) -> dict:  # fmt: skip
-    """One controller's run writing its part of lamps.csv / objects.csv into ``part_dir``
-    (replaying the traffic recorded in ``traffic``, if given)."""
-    part_dir.mkdir(parents=True, exist_ok=True)
-    label = spec.display_name
-    with open(part_dir / f"{label}.lamps.csv", "w", newline="") as lf, \
-            open(part_dir / f"{label}.objects.csv", "w", newline="") as of:  # fmt: skip
-        return run_controller(scenario, spec, lamps_writer=csv.writer(lf), objects_writer=csv.writer(of),
-                              on_progress=on_progress, traffic=traffic, fidelity=fidelity,
-                              sensor_model=sensor_model)
-
-
 #: A worker sends its progress at most this often, wall s: every put is a round trip to the
 #: manager process, and a fast night's six workers sent one per 5 sim s (35k for 28,800 s)
 PROGRESS_EVERY_S = 0.25
@@ -122,20 +109,17 @@ class _Batched:
 
 
 def _worker(args):
-    """One task of a pool: the traffic recorder (no specs), one controller, or a group in step;
-    returns the summaries by display name."""
+    """One task of a pool: the traffic recorder (no specs), or a group of controllers
+    (``run_together``, one controller alone the usual group); returns the summaries by display name."""
     scenario, specs, part_dir, progress_queue, traffic, fidelity, sensor_model = args
     report = _Batched(progress_queue)
     traffic = None if traffic is None else Path(traffic)
-    if not specs:
+    if specs:
+        summaries = run_together(scenario, specs, Path(part_dir), traffic=traffic, fidelity=fidelity,
+                                 sensor_model=sensor_model, on_progress=report)[0]  # fmt: skip
+    else:
         record_traffic(scenario, traffic, on_progress=report)
         summaries = {}
-    elif len(specs) > 1:
-        summaries = run_together(scenario, specs, Path(part_dir), traffic=traffic, on_progress=report)[0]
-    else:
-        summaries = {specs[0].display_name: run_to_files(scenario, specs[0], Path(part_dir), on_progress=report,
-                                                         traffic=traffic, fidelity=fidelity,
-                                                         sensor_model=sensor_model)}  # fmt: skip
     report.flush()
     return summaries
 
@@ -146,12 +130,8 @@ def _run_here(scenario, groups, parts, traffic, fidelity, sensor_model, bar) -> 
         record_traffic(scenario, traffic, on_progress=bar.update)
     results: dict[str, dict] = {}
     for group in groups:
-        if len(group) > 1:
-            results.update(run_together(scenario, group, parts, traffic=traffic, on_progress=bar.update)[0])
-        else:
-            results[group[0].display_name] = run_to_files(scenario, group[0], parts, on_progress=bar.update,
-                                                          traffic=traffic, fidelity=fidelity,
-                                                          sensor_model=sensor_model)  # fmt: skip
+        results.update(run_together(scenario, group, parts, traffic=traffic, fidelity=fidelity,
+                                    sensor_model=sensor_model, on_progress=bar.update)[0])  # fmt: skip
     return results
 
 

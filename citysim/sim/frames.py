@@ -38,6 +38,21 @@ class SharedFrames:
         self.rendered = 0
         self.reused = 0
 
+    def frame(self, renderer, camera_index: int, frame_index: int, t_s: float, agents, lamp_levels):
+        """The frame as ``CameraFrames.frame`` gives it: handed out again if a controller in step
+        already asked for it under the same levels, else rendered by ``renderer`` (the asking
+        controller's own) and kept, read-only, until ``next_second``."""
+        key = (camera_index, frame_index, np.asarray(lamp_levels, dtype=np.float64).tobytes())
+        frame = self._second.get(key)
+        if frame is None:
+            frame = renderer.render(t_s, agents, lamp_levels, frame_index=frame_index)
+            frame.image.flags.writeable = False  # a fresh array (FrameOutput.finish), now shared
+            self._second[key] = frame
+            self.rendered += 1
+        else:
+            self.reused += 1
+        return frame
+
     def next_second(self) -> None:
         """Every controller in step has taken this second's frames: forget them."""
         self._second.clear()
@@ -54,16 +69,7 @@ class CameraFrames:
     def frame(self, camera_index: int, frame_index: int, t_s: float, agents, lamp_levels):
         """Camera ``camera_index``'s frame ``frame_index`` at ``t_s`` (s) showing ``agents`` under
         ``lamp_levels`` (one per street lamp, 0..1): a ``citysim.render.camera.RenderedFrame``."""
-        shared = self.shared
-        if shared is None:
-            return self.renderers[camera_index].render(t_s, agents, lamp_levels, frame_index=frame_index)
-        key = (camera_index, frame_index, np.asarray(lamp_levels, dtype=np.float64).tobytes())
-        frame = shared._second.get(key)
-        if frame is None:
-            frame = self.renderers[camera_index].render(t_s, agents, lamp_levels, frame_index=frame_index)
-            frame.image.flags.writeable = False  # a fresh array (FrameOutput.finish), now shared
-            shared._second[key] = frame
-            shared.rendered += 1
-        else:
-            shared.reused += 1
-        return frame
+        renderer = self.renderers[camera_index]
+        if self.shared is None:
+            return renderer.render(t_s, agents, lamp_levels, frame_index=frame_index)
+        return self.shared.frame(renderer, camera_index, frame_index, t_s, agents, lamp_levels)

@@ -18,7 +18,7 @@ never stepped, but every physics step comes at the same time with the same agent
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
@@ -132,12 +132,10 @@ class Night:
         """Run the clock from 0 to the scenario's end one simulated second at a time:
         ``on_second(t_s)`` before second ``t_s`` runs, ``on_progress(dt_s)`` after it. Between
         seconds a SIGTERM whose exception a C callback (pymunk's) swallowed stops the run."""
-        t_s = 0.0
-        while t_s < self.scenario.duration_s - 1e-9:
+        for t_s in whole_seconds(self.scenario.duration_s):
             t_next_s = self.run_second(t_s, on_second)
             if on_progress is not None:
                 on_progress(t_next_s - t_s)
-            t_s = t_next_s
 
     def run_second(self, t_s: float, on_second: Callable[[float], None] | None = None) -> float:
         """One step of ``run_whole_seconds``: ``on_second(t_s)``, then the clock to the next whole
@@ -177,6 +175,15 @@ class Night:
 
     def renderers(self, cameras: Sequence[int] | None = None) -> list[CameraRenderer]:
         return [self.renderer(i) for i in (range(self.n_cameras) if cameras is None else cameras)]
+
+
+def whole_seconds(duration_s: float) -> Iterator[float]:
+    """The start of every simulated second of a night ``duration_s`` long: 0, 1, 2, ... (the last
+    second may be cut short by the end; ``Night.run_second`` runs each)."""
+    t_s = 0.0
+    while t_s < duration_s - 1e-9:
+        yield t_s
+        t_s = min(duration_s, t_s + 1.0)
 
 
 def build_night(scenario: Scenario, replay: AgentSource | None = None) -> Night:

@@ -1,4 +1,8 @@
-"""Several full-fidelity camera controllers over one night, in step, rendering each frame once.
+"""A comparison's task: one or more controllers over one night, in step, writing their run files.
+
+Every controller of ``citysim.sim.compare`` runs here, most alone (a group of one runs exactly
+as ``citysim.sim.loop.run_controller`` runs it). Several full-fidelity camera controllers run in
+step render each frame once:
 
 Rendering is about two fifths of a full-fidelity camera controller's time (the rest is the
 detector), and every camera controller of a comparison films the same street on the same
@@ -27,6 +31,7 @@ from pathlib import Path
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.sim.frames import SharedFrames
 from citysim.sim.loop import ControllerRun
+from citysim.sim.night import whole_seconds
 
 
 def run_together(
@@ -35,16 +40,19 @@ def run_together(
     part_dir: Path,
     *,
     traffic: Path | None = None,
+    fidelity: str = "full",
+    sensor_model=None,
     on_progress: Callable[[float], None] | None = None,
-) -> tuple[dict[str, dict], SharedFrames]:
-    """Every controller of ``specs`` at full fidelity on the scenario's night, a simulated second
-    at a time, each writing its part of lamps.csv / objects.csv into ``part_dir`` (as
-    ``citysim.sim.compare.run_to_files`` does) and replaying ``traffic`` if given. Returns the
-    summaries by display name and the shared frames (their counts say how many were reused).
-    ``on_progress(dt_s)`` after each controller's second.
+) -> tuple[dict[str, dict], SharedFrames | None]:
+    """Every controller of ``specs`` on the scenario's night, a simulated second at a time, each
+    writing its part of lamps.csv / objects.csv into ``part_dir`` (``LABEL.lamps.csv``,
+    ``LABEL.objects.csv``) and replaying ``traffic`` if given. Two or more at full fidelity share
+    their frames; one alone runs exactly as ``citysim.sim.loop.run_controller`` runs it. Returns
+    the summaries by display name and the shared frames (their counts say how many were reused;
+    None when nothing was shared). ``on_progress(dt_s)`` after each controller's second.
     """
     part_dir.mkdir(parents=True, exist_ok=True)
-    frames = SharedFrames()
+    shared = SharedFrames() if fidelity == "full" and len(specs) > 1 else None
     with ExitStack() as files:
         runs = []
         for spec in specs:
@@ -53,13 +61,12 @@ def run_together(
             objects_file = files.enter_context(open(part_dir / f"{label}.objects.csv", "w", newline=""))
             runs.append(ControllerRun(scenario, spec, lamps_writer=csv.writer(lamps_file),
                                       objects_writer=csv.writer(objects_file), traffic=traffic,
-                                      fidelity="full", shared_frames=frames))  # fmt: skip
-        t_s = 0.0
-        while t_s < scenario.duration_s - 1e-9:
+                                      fidelity=fidelity, sensor_model=sensor_model, shared_frames=shared))  # fmt: skip
+        for t_s in whole_seconds(scenario.duration_s):
             for run in runs:
                 t_next_s = run.night.run_second(t_s, run.on_second)
                 if on_progress is not None:
                     on_progress(t_next_s - t_s)
-            frames.next_second()
-            t_s = t_next_s
-        return {spec.display_name: run.summary() for spec, run in zip(specs, runs, strict=True)}, frames
+            if shared is not None:
+                shared.next_second()
+        return {spec.display_name: run.summary() for spec, run in zip(specs, runs, strict=True)}, shared
