@@ -34,7 +34,7 @@ from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.calibration import sensor_model_for
 from citysim.sim.loop import check_controllers, check_fidelity, controller_spec
 from citysim.sim.replay import record_traffic
-from citysim.sim.together import run_together
+from citysim.sim.together import part_path, run_together
 from citysim.sim.workers import spawn_pool
 from citysim.world.approaches import approaches
 from citysim.world.coverage import camera_coverage
@@ -233,7 +233,7 @@ def _merge_parts(parts: Path, labels: list[str], stage: Path) -> None:
         with open(stage / f"{kind}.csv", "w", newline="") as out:
             csv.writer(out).writerow(header)
             for label in labels:
-                part = parts / f"{label}.{kind}.csv"
+                part = part_path(parts, label, kind)
                 if part.exists():
                     with open(part) as fh:
                         shutil.copyfileobj(fh, out)

@@ -34,6 +34,11 @@ from citysim.sim.loop import ControllerRun
 from citysim.sim.night import whole_seconds
 
 
+def part_path(part_dir: Path, label: str, kind: str) -> Path:
+    """Where controller ``label`` writes its part of the run's ``kind`` file (lamps, objects)."""
+    return part_dir / f"{label}.{kind}.csv"
+
+
 def run_together(
     scenario: Scenario,
     specs: Sequence[ControllerSpec],
@@ -45,8 +50,7 @@ def run_together(
     on_progress: Callable[[float], None] | None = None,
 ) -> tuple[dict[str, dict], SharedFrames | None]:
     """Every controller of ``specs`` on the scenario's night, a simulated second at a time, each
-    writing its part of lamps.csv / objects.csv into ``part_dir`` (``LABEL.lamps.csv``,
-    ``LABEL.objects.csv``) and replaying ``traffic`` if given. Two or more at full fidelity share
+    writing its part of lamps.csv / objects.csv into ``part_dir`` (``part_path``) and replaying ``traffic`` if given. Two or more at full fidelity share
     their frames; one alone runs exactly as ``citysim.sim.loop.run_controller`` runs it. Returns
     the summaries by display name and the shared frames (their counts say how many were reused;
     None when nothing was shared). ``on_progress(dt_s)`` after each controller's second.
@@ -57,8 +61,8 @@ def run_together(
         runs = []
         for spec in specs:
             label = spec.display_name
-            lamps_file = files.enter_context(open(part_dir / f"{label}.lamps.csv", "w", newline=""))
-            objects_file = files.enter_context(open(part_dir / f"{label}.objects.csv", "w", newline=""))
+            lamps_file = files.enter_context(open(part_path(part_dir, label, "lamps"), "w", newline=""))
+            objects_file = files.enter_context(open(part_path(part_dir, label, "objects"), "w", newline=""))
             runs.append(ControllerRun(scenario, spec, lamps_writer=csv.writer(lamps_file),
                                       objects_writer=csv.writer(objects_file), traffic=traffic,
                                       fidelity=fidelity, sensor_model=sensor_model, shared_frames=shared))  # fmt: skip
