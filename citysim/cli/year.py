@@ -8,10 +8,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from citysim.cli.common import controller_list
 from detector.cliargs import USAGE_EXIT, number
 from detector.outdir import check_output_dir
 
-# --- citysim year: a block of its own (command and arguments) -----------------------------------
+#: What a year folder holds; an earlier one may be replaced.
 YEAR_OUTPUTS = ("year.json", "plots/", "report.html")
 
 
@@ -53,10 +54,10 @@ def cmd_year(args) -> int:
     return 0
 
 
-def add_year(sub, epilog_fn) -> None:
-    """The `year` subcommand on ``sub`` (``epilog_fn`` lists the controllers under its help)."""
+def add(sub) -> None:
+    """The `year` subcommand on ``sub``."""
     y = sub.add_parser("year", help="annual energy, cost, CO2 and AECI of a scenario's street",
-                       epilog_fn=epilog_fn,
+                       epilog_fn=controller_list,
                        description="Sum every night of a year (civil dusk to dawn at the site) from an hourly "
                                    "response table of short simulated samples; write year.json, a monthly "
                                    "energy plot and report.html.")
