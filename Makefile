@@ -6,8 +6,10 @@ STAMP := $(VENV)/.installed
 # the test tools (pytest, xdist, hypothesis, ruff) only for the targets that use them: make demo
 # installs what the simulator needs and no more (about 6 s of a fresh clone's demo)
 TEST_STAMP := $(VENV)/.installed-test
+# the docs tools (MkDocs, Material, mkdocstrings) only for the docs site
+DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install demo demo-night test bench bench-night lint clean
+.PHONY: install demo demo-night test bench bench-night lint docs results results-check clean
 
 install: $(STAMP)
 
@@ -21,13 +23,17 @@ $(TEST_STAMP): $(STAMP)
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(TEST_STAMP)
 
+$(DOCS_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e '.[docs]'
+	touch $(DOCS_STAMP)
+
 # suburban_night: the whole night in fast mode (the shipped sensor model) for always_on, oracle, pir,
 # schedule and detector_located, its first minute again at full fidelity as the check, and the year's figures.
 # Prints each table; ends with the paths of results/demo/night/report.html and .../year/report.html.
 demo: $(STAMP)
 	$(PY) -m experiments.demo
 
-# The same with every controller of the scenario over the whole night: about 5.5 minutes on 2 cores (see README).
+# The same with every controller of the scenario over the whole night.
 demo-night: $(STAMP)
 	$(PY) -m experiments.demo --controllers all
 
@@ -43,8 +49,22 @@ bench: $(STAMP)
 bench-night: $(STAMP)
 	$(PY) -m experiments.bench --night
 
+# The docs site (docs/, mkdocs.yml) into site/, every warning an error; the reference pages are
+# written from the code by experiments/docs_site/hook.py during the build.
+docs: $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
+
+# docs/results/ (the results page and its figures, the README's headline among them) from the
+# result files committed in experiments/results/
+results: $(STAMP)
+	$(PY) -m experiments.results
+
+# fails when docs/results/ is not what `make results` would write
+results-check: $(STAMP)
+	$(PY) -m experiments.results --check
+
 lint: $(TEST_STAMP)
 	$(VENV)/bin/ruff check detector citysim experiments tests
 
 clean:
-	rm -rf $(VENV) results .pytest_cache
+	rm -rf $(VENV) results site .pytest_cache

@@ -121,17 +121,40 @@ def detection_from_fields(fields: dict) -> Detection:
 class Detector:
     """Per-camera detector: owns the background model and the tracker.
 
-    ``crop_to_range``: segment only the rows (and columns) of the frame where a target within
-    ``max_distance_m`` can appear (``detector.roi.range_crop``, the crop in ``self.crop``); every
-    target within range is then detected as on the full frame (same box, features and class);
-    only regions reaching above the band (beyond range, or taller than any target) are dropped.
-    False: the whole frame, as the paper's implementation does. By default CLAHE gives
-    the crop the whole frame's values, computed on the crop (``detector.clahe``).
-    ``equalise_tiles_only``: OpenCV's CLAHE on the full frame's tiles the crop needs (no faster
-    now; equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel
-    or two off the full frame's). ``tracking``: decide per track (``detector.tracks``, the
-    default; ``tracks`` a configured ``TrackSet`` or None for the default one) or per frame
-    (False: the paper's path, ``tracker`` its light box tracker).
+    Feed it a camera's frames in order with ``process``; ``is_target`` says whether a frame's
+    detections call for light. Pixel boxes are OpenCV ``boundingRect`` tuples (x, y, w, h).
+
+    Parameters
+    ----------
+    camera : CameraModel
+        The camera's height (m), tilt (degrees below the horizon), focal length (mm), sensor (mm)
+        and image size (px): the pinhole geometry of the paper's features.
+    model : DimensionalClassifier, optional
+        The classifier (default: the shipped general model). It must know a 'noise' class.
+    params : SegmenterParams
+        CLAHE, MOG2 and opening parameters.
+    max_distance_m : float
+        The range, m: regions farther away are not targets (> 0).
+    target_threshold : float
+        P(target) from which a region is a target (0-1).
+    division : DivisionParams
+        How merged regions are divided.
+    tracker : Tracker, optional
+        The per-frame path's light box tracker (with ``tracking=False``).
+    crop_to_range : bool
+        Segment only the rows (and columns) of the frame where a target within ``max_distance_m``
+        can appear (``detector.roi.range_crop``, the crop in ``self.crop``); every target within
+        range is then detected as on the full frame (same box, features and class); only regions
+        reaching above the band (beyond range, or taller than any target) are dropped. False: the
+        whole frame, as the paper's implementation does. CLAHE gives the crop the whole frame's
+        values, computed on the crop (``detector.clahe``).
+    equalise_tiles_only : bool
+        OpenCV's CLAHE on the full frame's tiles the crop needs (no faster; equalised values 1 DN
+        apart on about 0.1 % of the pixels, so now and then a box a pixel or two off).
+    tracking : bool
+        Decide per track (``detector.tracks``, the default) or per frame (False: the paper's path).
+    tracks : TrackSet, optional
+        A configured track set (default: the standard one).
     """
 
     def __init__(
@@ -287,10 +310,14 @@ class Detector:
         return proba, proba.tolist(), (1.0 - proba[:, self._noise_col]).tolist(), proba.argmax(axis=1).tolist()
 
     def process(self, gray: np.ndarray, learning_rate: float | None = None) -> list[Detection]:
-        """Detect and classify the moving objects of one uint8 (H, W) frame.
+        """Detect and classify the moving objects of one frame: a Detection per region, noise included.
 
-        ``learning_rate``: the background model's rate for this frame (default: MOG2's automatic
-        rate); see ``Segmenter.apply``.
+        Parameters
+        ----------
+        gray : numpy.ndarray
+            The frame, uint8, shape (height_px, width_px) of the camera.
+        learning_rate : float, optional
+            The background model's rate for this frame (default: MOG2's automatic rate).
         """
         self._check_frame(gray)
         if self._still is not None:

@@ -1,4 +1,4 @@
-"""The house rules of docs/ARCHITECTURE.md, checked on the import graph and the code's size.
+"""The house rules of docs/design/architecture.md, checked on the import graph and the code's size.
 
 Every import counts, function-local ones too (they are still dependencies, only deferred):
 no circles; ``detector`` never imports ``citysim`` or ``experiments``; the detector's runtime

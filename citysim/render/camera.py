@@ -110,7 +110,25 @@ class RenderedFrame:
 
 
 class CameraRenderer:
-    """Renders one camera's frames; the static scene is prepared once here."""
+    """Renders one camera's frames; the static scene is prepared once here.
+
+    World convention: x along the street, y across it, z up, metres; the camera's pose and
+    intrinsics come from its ``CameraModel`` (``tilt_deg`` is the depression below the horizon).
+
+    Parameters
+    ----------
+    camera : CameraModel
+        The camera: position (m), heading and tilt (degrees), focal length (mm), sensor (mm), image
+        size (px) and distortion.
+    street : Street
+        The street geometry, its lamps and scenery.
+    environment : EnvironmentSpec
+        Light, weather, wind, insects, sensor noise and exposure.
+    rng : numpy.random.Generator
+        The renderer's random stream (scenery sway, noise, rain, effects), drawn in call order.
+    options : RenderOptions
+        Infrared emitter power, motion blur and branch sway.
+    """
 
     def __init__(
         self,
@@ -187,12 +205,28 @@ class CameraRenderer:
         lamp_levels: Sequence[float],
         frame_index: int | None = None,
     ) -> RenderedFrame:
-        """The frame at time ``t_s`` (s) with ``agents`` and each street lamp at ``lamp_levels`` (0..1).
+        """The frame at time ``t_s`` with ``agents`` and each street lamp at its level.
 
         Sensor noise and rain come from the renderer's generator, in call order;
         with ``frame_index`` (>= 0) they are a function of that index and the
         renderer's seed instead, so a frame is the same whichever frames were
         rendered before it (cameras that skip idle frames stay comparable).
+
+        Parameters
+        ----------
+        t_s : float
+            Simulated time of the frame, s from the start of the run.
+        agents : sequence of AgentState
+            The road users and animals at ``t_s``.
+        lamp_levels : sequence of float
+            Each street lamp's level, 0 (off) to 1 (full), in lamp order.
+        frame_index : int, optional
+            The camera's frame number (>= 0), for noise independent of earlier calls.
+
+        Returns
+        -------
+        RenderedFrame
+            The 8-bit grey frame and its ground truth (each visible agent's box).
         """
         ambient, emitter = self.ambient_light, self.options.ir_emitter_power
         if frame_index is not None and frame_index < 0:

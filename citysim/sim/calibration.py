@@ -20,7 +20,7 @@ Three kinds of nights, ``runs`` of each (``calibration_nights``), ``duration_s``
   most, people arrive under dim lamps, and busy nights hardly show that: with busy nights alone
   (model v14) calibration saw 4 cars coming toward a camera under dim lamps, fast mode's
   ``detector_located`` lit 68 % of zone entries on entry at 02:00 (seed 2) where full fidelity
-  lit 95.5 %, and with quiet nights added 95.5 % (README, "Fast mode");
+  lit 95.5 %, and with quiet nights added 95.5 % (docs/design/validation.md);
 * region nights (seeds ``REGION_SEED_BASE + i``), one per threshold baseline and seed, at the
   scenario's own traffic, the lamps switched by that baseline: the threshold baselines' region
   sizes come from these alone (``citysim.fast.region_records`` says why).

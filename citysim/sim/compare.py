@@ -8,7 +8,7 @@ every controller replays it instead of stepping its own pymunk world: the same
 agents bit for bit, the world's cost paid once. The run folder is staged and
 moved into place only when every controller finished:
 
-    DIR/summary.json   figures per controller (see README)
+    DIR/summary.json   figures per controller (see docs/guide/run.md)
     DIR/objects.csv    one row per object and lamp zone it crossed
     DIR/lamps.csv      level and power of every lamp, every simulated second
 """
@@ -186,17 +186,43 @@ def run_comparison(
     cache_dir: Path | None = None,
     share_frames: bool = False,
 ) -> dict:
-    """Run the controllers; return the summary.json dict and, with ``out_dir``, write the run folder
-    (summary.json, objects.csv, lamps.csv; the plots are drawn by ``citysim.report`` from these).
+    """Run every controller over the scenario's night on the same traffic; the summary.json dict.
 
-    ``replay_traffic``: simulate the traffic once and replay it to every controller (the default);
-    False steps a world per controller (the same results, bit for bit, at a higher cost).
+    Parameters
+    ----------
+    scenario : Scenario
+        The validated scenario; its ``duration_s`` (s) and ``seed`` set the night.
+    controllers : sequence of str, optional
+        Controller names or labels (default: the scenario's list); ``always_on`` is added.
+    progress : bool
+        Show a progress bar.
+    out_dir : Path, optional
+        Run folder to write (summary.json, objects.csv, lamps.csv), staged: an interrupted run
+        leaves nothing; the plots are drawn by ``citysim.report`` from these.
+    workers : int
+        Parallel processes, one controller (or group) each.
+    scenario_file : str, optional
+        The scenario's path, recorded in summary.json.
+    replay_traffic : bool
+        Simulate the traffic once and replay it to every controller; False steps a world per
+        controller (the same results, bit for bit, at a higher cost).
+    fidelity : {"full", "fast"}
+        "full" renders and detects every judged frame; "fast" judges cameras with the scenario's
+        sensor model (``sensor_model``, else the one cached in ``cache_dir``, calibrated first if
+        there is none; see ``citysim.sim.calibration``).
+    sensor_model : SensorModel, optional
+    cache_dir : Path, optional
+        Folder of calibrated sensor models (default: .cache/sensor_models in the project).
+    share_frames : bool
+        At full fidelity, run the camera controllers in step, a group per worker, rendering a frame
+        once for all of a group whose lamps stand alike (the same results, bit for bit). Off by
+        default: on suburban_night it saves renders but not time.
 
-    ``fidelity`` "fast": cameras judged by the scenario's sensor model (``sensor_model``, else the
-    one cached in ``cache_dir``, calibrated first if there is none; see ``citysim.sim.calibration``).
-    ``share_frames``: at full fidelity, run the camera controllers in step, a group per worker,
-    rendering a frame once for all of a group whose lamps stand alike (the same results, bit for
-    bit). Off by default: on suburban_night it saves renders but not time (README, "Speed").
+    Returns
+    -------
+    dict
+        summary.json's contents: the run's facts, ``coverage``, ``approaches`` and, under
+        ``controllers``, each one's figures (``energy_kwh``, ``savings_vs_always_on``, ...).
     """
     specs = resolve_controllers(scenario, controllers)
     check_fidelity(fidelity)

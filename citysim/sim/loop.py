@@ -132,18 +132,36 @@ def run_controller(
 
 
 class ControllerRun:
-    """One controller's night, set up and ready to run: ``night.run_whole_seconds(on_second)``
-    runs it alone; ``citysim.sim.together`` runs several a second at a time, sharing frames.
+    """One controller's night, set up and ready to run.
 
-    ``traffic``: a folder of this scenario's recorded traffic (``citysim.sim.replay``) to replay
-    instead of stepping the world; the agents, and so the summary, are the same bit for bit.
-    ``fidelity`` "fast" needs ``sensor_model`` (``citysim.fast.model.SensorModel``, see
-    ``citysim.sim.calibration``). ``sensors`` replaces the cameras' detectors in full fidelity
-    (calibration records them); ``observers`` are extra collectors (calibration's recorder);
-    ``lamps_held_dim``: the controller's triggers (``LampBank.trigger``, how every controller but the
-    clock schedules lights a lamp) change no level, so the lamps stay dim (calibration's quiet nights).
-    ``shared_frames``: full fidelity's camera frames are taken from, and given to, the frames of
-    the controllers run in step with this one (``citysim.sim.together``).
+    ``night.run_whole_seconds(on_second)`` runs it alone; ``citysim.sim.together`` runs several a
+    second at a time, sharing frames; ``summary()`` gives its summary.json entry at the end.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The validated scenario.
+    spec : ControllerSpec
+        The controller and its parameters.
+    lamps_writer, objects_writer : csv.writer, optional
+        Where lamps.csv and objects.csv rows go (none: not written).
+    traffic : Path, optional
+        A folder of this scenario's recorded traffic (``citysim.sim.replay``) to replay instead of
+        stepping the world; the agents, and so the summary, are the same bit for bit.
+    fidelity : {"full", "fast"}
+        "fast" needs ``sensor_model``.
+    sensor_model : SensorModel, optional
+        ``citysim.fast.model.SensorModel``, see ``citysim.sim.calibration``.
+    sensors : object, optional
+        Replaces the cameras' detectors at full fidelity (calibration records them).
+    observers : sequence of Collector
+        Extra collectors (calibration's recorder).
+    lamps_held_dim : bool
+        The controller's triggers (``LampBank.trigger``, how every controller but the clock
+        schedules lights a lamp) change no level, so the lamps stay dim (calibration's quiet nights).
+    shared_frames : SharedFrames, optional
+        Full fidelity's camera frames are taken from, and given to, the frames of the controllers
+        run in step with this one (``citysim.sim.together``).
     """
 
     def __init__(

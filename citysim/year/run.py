@@ -22,7 +22,35 @@ from detector.outdir import staged_output
 def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, workers: int = 1,
              fidelity: str = "full", check_nights: int = 0, progress: bool = True,
              scenario_file: str | None = None) -> dict:
-    """Build the table, sum the year, run the check nights; write out_dir/year.json; return its dict."""
+    """Build the response table, sum the year, run the check nights; write out_dir/year.json.
+
+    Parameters
+    ----------
+    plan : YearPlan
+        The checked input and the year's dark hours with their traffic levels (``citysim.year.plan``).
+    out_dir : Path
+        Folder to write year.json into (staged: an interrupted run leaves nothing half-written).
+    names : list of str, optional
+        Controllers (default: the scenario's list).
+    workers : int
+        Parallel processes for the table's runs.
+    fidelity : {"full", "fast"}
+        How the camera controllers are judged in the table's runs.
+    check_nights : int
+        Whole nights simulated at full fidelity beside the table's estimate (0: none).
+    progress : bool
+        Show a progress bar.
+    scenario_file : str, optional
+        The scenario's path, recorded in year.json.
+
+    Returns
+    -------
+    dict
+        year.json's contents: per controller ``energy_kwh_per_year``, ``savings_vs_always_on``,
+        ``cost_per_year``, ``co2_kg_per_year``, ``aeci_wh_per_m2`` (Wh/m²), ``lit_on_entry_rate``
+        and its 95 % interval, ``zone_entries_per_year``, ``dark_s_per_year``; the table and the
+        check nights.
+    """
     table = build_table(plan.scenario, plan.year, plan.dark_hours, names, workers=workers, fidelity=fidelity,
                         progress=progress)  # fmt: skip
     figures = annual_figures(table, plan.pieces, plan.scenario, plan.year)

@@ -15,7 +15,7 @@ Pooling the per-frame class probabilities (``POOLINGS``) into P(target): ``mean_
 default) averages the log-probabilities of the last ``POOL_FRAMES`` frames and renormalises:
 the frames as independent evidence about one object, tempered by their number so a long track
 is not certain; ``mean`` averages the probabilities; ``last`` is the newest frame alone. The
-choice was measured on the paper's scene replicas (``experiments.paper``; figures in README).
+choice was measured on the paper's scene replicas (``experiments.paper``; figures in docs/design/detector-measurements.md).
 Which target class a track is takes its whole life (``log_sums``: the summed log-probabilities
 of every frame): a walker whose silhouette looks like a cyclist's now and then stays a
 pedestrian, while P(target) answers within a second.

@@ -1,0 +1,39 @@
+"""The committed results page and figures are exactly what `make results` makes of the committed files."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+from experiments.results.__main__ import DOCS_RESULTS, stale_files, write_results
+from experiments.results.sources import RESULTS_DIR, SOURCES
+
+
+def test_committed_results_are_current():
+    assert stale_files() == [], "run `make results` and commit docs/results/"
+
+
+def test_a_changed_result_file_makes_the_page_stale(tmp_path):
+    """The check can fail: one controller's saving changed in a copy of the result files."""
+    results = tmp_path / "results"
+    results.mkdir()
+    for source in SOURCES:
+        shutil.copy(RESULTS_DIR / source.file, results / source.file)
+    year_file = results / SOURCES[0].file
+    year = json.loads(year_file.read_text())
+    year["controllers"]["oracle"]["savings_vs_always_on"] += 0.01
+    year_file.write_text(json.dumps(year))
+    assert set(stale_files(DOCS_RESULTS, results)) >= {"index.md", "frontier_year.png"}
+
+
+def test_the_page_names_each_source_command_and_figure(tmp_path):
+    page = write_results(tmp_path)[0].read_text()
+    for source in SOURCES:
+        assert f"`{source.command}`" in page and source.file in page
+    assert "![" in page and "frontier_year.png" in page and "make results" in page
+
+
+def test_same_files_give_the_same_bytes(tmp_path):
+    first = [p.read_bytes() for p in write_results(tmp_path / "a")]
+    second = [p.read_bytes() for p in write_results(tmp_path / "b")]
+    assert first == second
