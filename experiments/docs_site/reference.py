@@ -54,9 +54,13 @@ def _option_rows(parser: argparse.ArgumentParser) -> Iterator[str]:
             name += f" `{action.metavar or action.dest.upper()}`"
         default = action.default
         shown = "" if default in (None, argparse.SUPPRESS, False) or not action.option_strings else f"`{default}`"
-        choices = f" One of: {', '.join(map(str, action.choices))}." if action.choices else ""
+        choices = f"One of: {', '.join(map(str, action.choices))}." if action.choices else ""
         required = " (required)" if action.required and action.option_strings else ""
-        yield f"| {name}{required} | {_cell(action.help or '')}{_cell(choices)} | {shown} |"
+        helped = _cell(action.help or "")
+        if helped and choices and not helped.endswith("."):
+            helped += "."
+        what = " ".join(part for part in (helped, choices) if part)
+        yield f"| {name}{required} | {what} | {shown} |"
 
 
 def parser_section(parser: argparse.ArgumentParser, level: str = "##") -> str:
@@ -177,7 +181,7 @@ def _model_table(model: type[BaseModel], path: str, comments: dict[str, str]) ->
     for name, info in model.model_fields.items():
         comment = comments.get(f"{path}.{name}".lstrip("."))
         described = (info.description or (f"*suburban_night:* {comment}" if comment else "")) + _limits(info)
-        yield (f"| `{name}` | `{_cell(type_name(info.annotation))}` | {unit_of(name)} | {_cell(_default(info))} "
+        yield (f"| `{name}` | {_cell(type_name(info.annotation))} | {unit_of(name)} | {_cell(_default(info))} "
                f"| {_cell(described)} |")
     yield ""
 

@@ -42,7 +42,7 @@ def test_every_scenario_field_is_on_the_schema_page():
 
 def test_a_field_shows_its_unit_default_and_comment():
     page = scenario_page()
-    hold = next(line for line in page.splitlines() if line.startswith("| `hold_s` | `float` |"))
+    hold = next(line for line in page.splitlines() if line.startswith("| `hold_s` | float |"))
     assert "| s |" in hold and "| `30.0` |" in hold and "after the last detection" in hold
     first = next(line for line in page.splitlines() if line.startswith("| `first_x_m` |"))
     assert "*suburban_night:* lamps at x = 45" in first  # no description in the model: the scenario's comment
