@@ -47,7 +47,7 @@ def select_streets(osm_path: str | Path, highway_classes: tuple[str, ...] = RESI
     found = []
     for name in names:
         try:
-            street = street_from_data(data, name, lamps_within_m)
+            street = street_from_data(data, name, lamps_within_m, context=False)
         except GisInputError:
             continue
         if len(street.poles) >= min_lamps and street.highway in highway_classes:

@@ -17,6 +17,8 @@ from citysim.gis.osm import OsmData, OsmWay
 #: ways of their own class.
 ROAD_CLASSES = ("residential", "living_street", "unclassified", "tertiary", "secondary", "primary",
                 "tertiary_link", "secondary_link", "primary_link", "road")
+#: The sharpest turn from one way into the next that still continues the street, deg.
+MAX_JOIN_TURN_DEG = 120.0
 #: Most ways searched when a name's ways branch (a longer search takes the greedy chain).
 MAX_SEARCH_STEPS = 20000
 
@@ -64,8 +66,17 @@ def split_at_shared(ways: list[OsmWay]) -> list[OsmWay]:
     return pieces
 
 
-def _chains(ways: list[OsmWay]) -> list[list[tuple[OsmWay, bool]]]:
-    """Every maximal simple chain through ways joined end to end (depth-first, bounded)."""
+def _turn_deg(data: OsmData, a: int, b: int, c: int) -> float:
+    """The change of direction (deg) at node b going a -> b -> c (local scale of longitude)."""
+    (x1, y1), (x2, y2), (x3, y3) = (data.nodes[n] for n in (a, b, c))
+    k = math.cos(math.radians(y2))
+    h1, h2 = math.atan2(y2 - y1, (x2 - x1) * k), math.atan2(y3 - y2, (x3 - x2) * k)
+    return abs(math.degrees((h2 - h1 + math.pi) % (2 * math.pi) - math.pi))
+
+
+def _chains(ways: list[OsmWay], data: OsmData | None = None) -> list[list[tuple[OsmWay, bool]]]:
+    """Every maximal simple chain through ways joined end to end, no node passed twice
+    (depth-first, bounded)."""
     found: list[list[tuple[OsmWay, bool]]] = []
     steps = 0
 
@@ -74,8 +85,14 @@ def _chains(ways: list[OsmWay]) -> list[list[tuple[OsmWay, bool]]]:
         steps += 1
         way, rev = chain[-1]
         end = way.node_ids[0] if rev else way.node_ids[-1]
+        seen = {n for piece, _ in chain for n in piece.node_ids}
         nexts = [(w, w.node_ids[-1] == end) for w in ways
-                 if id(w) not in used and end in (w.node_ids[0], w.node_ids[-1])]
+                 if id(w) not in used and end in (w.node_ids[0], w.node_ids[-1])
+                 and not seen.intersection(w.node_ids[:-1] if w.node_ids[-1] == end else w.node_ids[1:])]
+        if data is not None:  # a street goes on across a junction; it does not turn back into a branch
+            before = way.node_ids[1] if rev else way.node_ids[-2]
+            nexts = [(w, r) for w, r in nexts
+                     if _turn_deg(data, before, end, w.node_ids[-2] if r else w.node_ids[1]) <= MAX_JOIN_TURN_DEG]
         if not nexts or steps > MAX_SEARCH_STEPS:
             found.append(list(chain))
             return
@@ -135,7 +152,7 @@ def join_street(data: OsmData, way: str) -> JoinedStreet:
     lengths = {id(w): _length_m(data, w) for w in ways}
     best: list[tuple[OsmWay, bool]] = []
     best_key = (-1.0, 0)
-    for chain in _chains(ways):
+    for chain in _chains(ways, data):
         if must is not None and must not in {w.id for w, _ in chain}:
             continue
         # longest first; of a chain and its reverse, the one with fewer ways running backwards

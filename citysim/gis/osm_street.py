@@ -63,8 +63,9 @@ def import_osm(osm_path: str | Path, way: str, lamps_within_m: float = 15.0) -> 
     return street_from_data(read_osm(osm_path), way, lamps_within_m)
 
 
-def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0) -> ImportedStreet:
-    """``import_osm`` on an OSM file already read (``read_osm``)."""
+def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0, context: bool = True) -> ImportedStreet:
+    """``import_osm`` on an OSM file already read (``read_osm``); ``context`` False leaves out the
+    nearby ways (only the picture needs them)."""
     joined = join_street(data, str(way))
     lonlat = [data.nodes[n] for n in joined.node_ids]
     frame = LocalFrame(latitude_deg=lonlat[0][1], longitude_deg=lonlat[0][0])
@@ -74,7 +75,8 @@ def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0) -> I
     poles = match_lamps(list(centreline), _lamp_points(data, frame), lamps_within_m, joined.name)
     own = set(joined.way_ids)
     entries = with_shares(raw_entries(data, joined.node_ids, own, frame, list(centreline)))
-    ways_text = ", ".join(f"{w.id}{' (reversed)' if r else ''}" for w, r in joined.ways)
+    pieces = [f"{w.id}{' (reversed)' if r else ''}" for w, r in joined.ways]
+    ways_text = ", ".join(p for i, p in enumerate(pieces) if i == 0 or p != pieces[i - 1])
     notes = (f"street: OSM way{'s' if len(joined.ways) > 1 else ''} {ways_text}, highway={main.highway}",
              *cross.notes,
              f"lamps: {len(poles)} highway=street_lamp nodes within {lamps_within_m:g} m of the centreline",
@@ -84,7 +86,7 @@ def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0) -> I
         source=f"OpenStreetMap way{'s' if len(joined.ways) > 1 else ''} {', '.join(map(str, joined.way_ids))} "
                "(Map data (c) OpenStreetMap contributors, ODbL 1.0)",
         highway=main.highway, cross=cross, poles=tuple(poles), entries=tuple(entries),
-        context_m=_context(data, frame, centreline, own), notes=notes)
+        context_m=_context(data, frame, centreline, own) if context else (), notes=notes)
     return finish_street(street)
 
 

@@ -11,6 +11,7 @@ can differ from true north by degrees, and its coordinates are six and seven dig
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 from pyproj import CRS, Transformer
 from pyproj.exceptions import CRSError
@@ -18,6 +19,14 @@ from pyproj.exceptions import CRSError
 from citysim.gis.errors import GisInputError
 
 WGS84 = "EPSG:4326"
+
+
+@lru_cache(maxsize=64)
+def _tmerc(latitude_deg: float, longitude_deg: float) -> Transformer:
+    """WGS84 lon/lat -> the transverse Mercator centred on (latitude_deg, longitude_deg), m."""
+    proj = (f"+proj=tmerc +lat_0={latitude_deg!r} +lon_0={longitude_deg!r} "
+            "+k=1 +x_0=0 +y_0=0 +ellps=WGS84 +units=m +no_defs")
+    return Transformer.from_crs(WGS84, proj, always_xy=True)
 
 
 @dataclass(frozen=True)
@@ -28,9 +37,7 @@ class LocalFrame:
     longitude_deg: float
 
     def _transformer(self) -> Transformer:
-        proj = (f"+proj=tmerc +lat_0={self.latitude_deg!r} +lon_0={self.longitude_deg!r} "
-                "+k=1 +x_0=0 +y_0=0 +ellps=WGS84 +units=m +no_defs")
-        return Transformer.from_crs(WGS84, proj, always_xy=True)
+        return _tmerc(self.latitude_deg, self.longitude_deg)
 
     def to_local(self, lonlat: list[tuple[float, float]]) -> list[tuple[float, float]]:
         """Project (longitude_deg, latitude_deg) pairs (WGS84) to local (x_m, y_m) pairs."""

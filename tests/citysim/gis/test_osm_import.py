@@ -102,3 +102,26 @@ def test_bad_input_is_one_clear_error(way, within_m, message):
     with pytest.raises(GisInputError) as err:
         import_osm(FIXTURE, way, lamps_within_m=within_m)
     assert message in str(err.value)
+
+
+def test_a_pbf_file_imports_as_its_xml(tmp_path):
+    import osmium
+
+    pbf = tmp_path / "teststrasse.osm.pbf"
+    with osmium.SimpleWriter(str(pbf)) as writer:
+        for obj in osmium.FileProcessor(str(FIXTURE)):
+            writer.add(obj)
+    from_pbf, from_xml = import_osm(pbf, "Teststraße"), import_osm(FIXTURE, "Teststraße")
+    assert from_pbf.centreline_m == from_xml.centreline_m
+    assert [(p.s_m, p.d_m) for p in from_pbf.poles] == [(p.s_m, p.d_m) for p in from_xml.poles]
+
+
+def test_a_branch_that_turns_back_is_not_joined_into_the_street(tmp_path):
+    # a same-name spur leaving Teststraße's end at (100, 80) back south-west, 170 deg from its heading
+    text = FIXTURE.read_text().replace("</osm>", (
+        '  <node id="40" lat="51.0002" lon="7.0012"/>\n'
+        '  <way id="17"><nd ref="3"/><nd ref="40"/><tag k="highway" v="residential"/>'
+        '<tag k="name" v="Teststraße"/></way>\n</osm>'))
+    spur = tmp_path / "spur.osm"
+    spur.write_text(text)
+    assert import_osm(spur, "Teststraße").length_m == pytest.approx(180.0, abs=TOL_M)
