@@ -27,13 +27,14 @@ def _lamp_points(data: OsmData, frame: LocalFrame) -> list[LampPoint]:
 
 
 def _context(data: OsmData, frame: LocalFrame, centreline, own: set[int]) -> tuple:
-    """Every other highway near the street, as local polylines (for the picture)."""
+    """Every other highway near the street, as local polylines (for the picture); ``own`` are the
+    node ids of the street itself."""
     xs, ys = zip(*centreline, strict=True)
     lo_x, hi_x = min(xs) - CONTEXT_MARGIN_M, max(xs) + CONTEXT_MARGIN_M
     lo_y, hi_y = min(ys) - CONTEXT_MARGIN_M, max(ys) + CONTEXT_MARGIN_M
     out = []
     for way in data.ways:
-        if way.id in own:
+        if own.issuperset(way.node_ids):
             continue
         pts = frame.to_local([data.nodes[n] for n in way.node_ids])
         if any(lo_x <= x <= hi_x and lo_y <= y <= hi_y for x, y in pts):
@@ -86,7 +87,7 @@ def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0, cont
         source=f"OpenStreetMap way{'s' if len(joined.ways) > 1 else ''} {', '.join(map(str, joined.way_ids))} "
                "(Map data (c) OpenStreetMap contributors, ODbL 1.0)",
         highway=main.highway, cross=cross, poles=tuple(poles), entries=tuple(entries),
-        context_m=_context(data, frame, centreline, own) if context else (), notes=notes)
+        context_m=_context(data, frame, centreline, set(joined.node_ids)) if context else (), notes=notes)
     return finish_street(street)
 
 

@@ -17,6 +17,8 @@ from citysim.gis.geometry import cumulative_s, offset_point, point_at
 
 #: How far along the ground a camera's view is drawn: the distance a lamp camera sees people at, m.
 VIEW_RANGE_M = 25.0
+#: The picture shows this much around the street, m.
+ZOOM_MARGIN_M = 35.0
 #: Step along the centreline for outlines and blind stretches, m.
 STEP_M = 0.5
 
@@ -144,6 +146,10 @@ def draw_street(data: dict, path: str | Path, context_m=()) -> Path:
         ax.plot(x, y, "^", color="purple", ms=9, zorder=6)
         ax.annotate(e.get("name", e["kind"]), (x, y), xytext=(5, -10), textcoords="offset points", fontsize=7,
                     color="purple")
+    xy = np.asarray(centreline)
+    lo, hi = xy.min(axis=0) - ZOOM_MARGIN_M, xy.max(axis=0) + ZOOM_MARGIN_M
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
     ax.set_xlabel("east, m (local frame)")
     ax.set_ylabel("north, m")
