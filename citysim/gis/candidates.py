@@ -51,7 +51,6 @@ def select_streets(osm_path: str | Path, highway_classes: tuple[str, ...] = RESI
         except GisInputError:
             continue
         if len(street.poles) >= min_lamps and street.highway in highway_classes:
-            ids = tuple(int(i) for i in street.source.split(" (")[0].split(" ", 2)[2].split(", "))
-            found.append(StreetCandidate(street.name, ids, street.highway, round(street.length_m, 1),
+            found.append(StreetCandidate(street.name, street.way_ids, street.highway, round(street.length_m, 1),
                                          len(street.poles), len(street.entries)))
     return sorted(found, key=lambda c: (-c.lamp_count, c.name))

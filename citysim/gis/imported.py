@@ -7,6 +7,7 @@ an ordinary scenario (the mapping `write_scenario` writes as commented YAML).
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import unicodedata
 from dataclasses import dataclass
@@ -42,7 +43,8 @@ CONTROLLERS = ["always_on", "oracle", "pir", "detector_located"]
 class ImportedStreet:
     """A street ready to be written: name, centreline (x_m, y_m pairs, local east/north frame),
     origin of that frame (WGS84 deg), source CRS, source text, highway class, cross-section,
-    poles, side entries, nearby ways for the picture (local polylines) and notes for the file."""
+    poles, side entries, nearby ways for the picture (local polylines), notes for the file and
+    the source's OSM way ids (empty for other sources)."""
 
     name: str
     centreline_m: tuple[tuple[float, float], ...]
@@ -55,6 +57,7 @@ class ImportedStreet:
     entries: tuple[SideEntry, ...]
     context_m: tuple[tuple[tuple[float, float], ...], ...] = ()
     notes: tuple[str, ...] = ()
+    way_ids: tuple[int, ...] = ()
 
     @property
     def length_m(self) -> float:
@@ -93,8 +96,7 @@ def finish_street(street: ImportedStreet) -> ImportedStreet:
     moved = sum(p.d_m != q.d_m for p, q in zip(poles, street.poles, strict=True))
     notes = street.notes + ((f"{moved} of {len(poles)} poles were mapped inside the lanes or walking room and "
                              "stand at its edge here (their mapped offset is in their ref)",) if moved else ())
-    return ImportedStreet(street.name, street.centreline_m, street.origin_deg, street.crs, street.source,
-                          street.highway, street.cross, tuple(poles), street.entries, street.context_m, notes)
+    return dataclasses.replace(street, poles=tuple(poles), notes=notes)
 
 
 def _poles(street: ImportedStreet) -> list[dict]:

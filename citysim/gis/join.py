@@ -38,7 +38,7 @@ class JoinedStreet:
         return tuple(dict.fromkeys(w.id for w, _ in self.ways))
 
 
-def _length_m(data: OsmData, way: OsmWay) -> float:
+def way_length_m(data: OsmData, way: OsmWay) -> float:
     """A way's length on a sphere (m): a ranking figure only, not the imported geometry."""
     total = 0.0
     for a, b in zip(way.node_ids, way.node_ids[1:], strict=False):
@@ -149,7 +149,7 @@ def join_street(data: OsmData, way: str) -> JoinedStreet:
     name, whole = _select_ways(data, way)
     ways = split_at_shared(whole)
     must = int(way) if way.strip().isdigit() else None
-    lengths = {id(w): _length_m(data, w) for w in ways}
+    lengths = {id(w): way_length_m(data, w) for w in ways}
     best: list[tuple[OsmWay, bool]] = []
     best_key = (-1.0, 0)
     for chain in _chains(ways, data):

@@ -6,11 +6,11 @@ from pathlib import Path
 
 from citysim.gis.entries import raw_entries, with_shares
 from citysim.gis.imported import ImportedStreet, checked_centreline, finish_street, scenario_data
-from citysim.gis.join import JoinedStreet, _length_m, join_street
+from citysim.gis.join import JoinedStreet, way_length_m, join_street
 from citysim.gis.lamps import LampPoint, match_lamps
 from citysim.gis.osm import OsmData, read_osm
 from citysim.gis.projection import WGS84, LocalFrame
-from citysim.gis.tags import _metres, cross_section
+from citysim.gis.tags import metres, cross_section
 
 #: Nearby ways drawn in the picture reach this far beyond the street's bounding box, m.
 CONTEXT_MARGIN_M = 60.0
@@ -22,7 +22,7 @@ def _lamp_points(data: OsmData, frame: LocalFrame) -> list[LampPoint]:
     for lamp, (x, y) in zip(data.lamps, xy, strict=True):
         kind = lamp.tags.get("lamp_type") or lamp.tags.get("light:method")
         ref = f"osm node {lamp.id}" + (f" ({kind})" if kind else "")
-        points.append(LampPoint(ref, x, y, _metres(lamp.tags.get("height")), None, lamp.tags.get("object:street")))
+        points.append(LampPoint(ref, x, y, metres(lamp.tags.get("height")), None, lamp.tags.get("object:street")))
     return points
 
 
@@ -44,7 +44,7 @@ def _context(data: OsmData, frame: LocalFrame, centreline, own: set[int]) -> tup
 
 def _main_way(data: OsmData, joined: JoinedStreet):
     """The way making up most of the street, and whether it runs reversed in it (its tags rule)."""
-    return max(joined.ways, key=lambda wr: (_length_m(data, wr[0]), -wr[0].id))
+    return max(joined.ways, key=lambda wr: (way_length_m(data, wr[0]), -wr[0].id))
 
 
 def import_osm(osm_path: str | Path, way: str, lamps_within_m: float = 15.0) -> ImportedStreet:
@@ -87,7 +87,8 @@ def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0, cont
         source=f"OpenStreetMap way{'s' if len(joined.ways) > 1 else ''} {', '.join(map(str, joined.way_ids))} "
                "(Map data (c) OpenStreetMap contributors, ODbL 1.0)",
         highway=main.highway, cross=cross, poles=tuple(poles), entries=tuple(entries),
-        context_m=_context(data, frame, centreline, set(joined.node_ids)) if context else (), notes=notes)
+        context_m=_context(data, frame, centreline, set(joined.node_ids)) if context else (), notes=notes,
+        way_ids=joined.way_ids)
     return finish_street(street)
 
 

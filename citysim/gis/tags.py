@@ -41,7 +41,7 @@ class CrossSection:
     notes: tuple[str, ...]
 
 
-def _metres(value: str | None) -> float | None:
+def metres(value: str | None) -> float | None:
     match = re.match(r"^\s*([0-9]+(?:\.[0-9]+)?)\s*(m)?\s*$", value or "")
     return float(match.group(1)) if match else None
 
@@ -90,7 +90,7 @@ def cross_section(tags: dict[str, str], highway: str, reversed_way: bool) -> Cro
     if one_dir is not None and reversed_way:
         one_dir = -one_dir
     count = int(tags["lanes"]) if tags.get("lanes", "").isdigit() and int(tags["lanes"]) > 0 else (1 if one_dir else 2)
-    width = _metres(tags.get("width"))
+    width = metres(tags.get("width"))
     lane_w = width / count if width else LANE_WIDTH_M.get(highway, DEFAULT_LANE_WIDTH_M)
     lane_w = round(min(max(lane_w, MIN_LANE_WIDTH_M), 6.0), 2)
     notes = [f"lanes: {count} ({'lanes=' + tags['lanes'] if 'lanes' in tags else 'default'}), "
@@ -104,7 +104,7 @@ def cross_section(tags: dict[str, str], highway: str, reversed_way: bool) -> Cro
     left, right, source = _sidewalk_sides(tags, highway)
     if reversed_way:
         left, right = right, left
-    walk_w = _metres(tags.get("sidewalk:width")) or SIDEWALK_WIDTH_M
+    walk_w = metres(tags.get("sidewalk:width")) or SIDEWALK_WIDTH_M
     walk_w = min(max(walk_w, 1.0), 10.0)
     sidewalks = [(sign * round(half + walk_w / 2, 2), walk_w) for sign, on in ((-1, right), (1, left)) if on]
     notes.append(f"sidewalks: {'left' if left else ''}{' and ' if left and right else ''}{'right' if right else ''}"
