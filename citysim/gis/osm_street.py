@@ -6,11 +6,11 @@ from pathlib import Path
 
 from citysim.gis.entries import raw_entries, with_shares
 from citysim.gis.imported import ImportedStreet, checked_centreline, finish_street, scenario_data
-from citysim.gis.join import JoinedStreet, way_length_m, join_street
+from citysim.gis.join import JoinedStreet, join_street, way_length_m
 from citysim.gis.lamps import LampPoint, match_lamps
 from citysim.gis.osm import OsmData, read_osm
 from citysim.gis.projection import WGS84, LocalFrame
-from citysim.gis.tags import metres, cross_section
+from citysim.gis.tags import cross_section, metres
 
 #: Nearby ways drawn in the picture reach this far beyond the street's bounding box, m.
 CONTEXT_MARGIN_M = 60.0
