@@ -136,7 +136,8 @@ def _common(p) -> None:
 def add(sub) -> None:
     imp = sub.add_parser("import", help="a real street (OpenStreetMap or GeoJSON) into a scenario file",
                          description="Import a real street and its lamps into a commented scenario file.")
-    srcs = imp.add_subparsers(dest="source", required=True, metavar="SOURCE", parser_class=type(imp))
+    srcs = imp.add_subparsers(dest="source", required=True, metavar="SOURCE", parser_class=type(imp),
+                              help="where the street comes from: osm or geojson")
     osm = srcs.add_parser("osm", help="a street of an OpenStreetMap file (.osm, .osm.bz2, .pbf)",
                           description="Import a street of an OpenStreetMap file: its ways joined by name, "
                                       "highway=street_lamp nodes, side entries and tags.")
