@@ -70,6 +70,7 @@ def command_line(args) -> str:
     for pair in args.rate or []:
         words += ["--rate", pair]
     words += ["--timezone", args.timezone] if args.timezone else []
+    words += ["--clear-poles"] if args.clear_poles else []
     return "citysim import " + shlex.join([*words, "--out", str(args.out)])
 
 
@@ -82,11 +83,11 @@ def import_text(args):
     if args.source == "osm":
         from citysim.gis.osm_street import import_osm
 
-        street = import_osm(args.file, args.way, args.lamps_within)
+        street = import_osm(args.file, args.way, args.lamps_within, args.clear_poles)
     else:
         from citysim.gis.geojson import import_geojson
 
-        street = import_geojson(args.street, args.lamps, args.crs, args.lamps_within)
+        street = import_geojson(args.street, args.lamps, args.crs, args.lamps_within, args.clear_poles)
     data = scenario_data(street, rates=_rates(args.rate), timezone=args.timezone)
     header = [f"{street.name}: imported by", f"  {command_line(args)}", ""]
     if "OpenStreetMap" in street.source:
@@ -129,6 +130,9 @@ def _common(p) -> None:
     p.add_argument("--rate", action="append", metavar="CLASS=PER_HOUR",
                    help="arrivals per hour of a road-user class, replacing the highway class's default (repeat)")
     p.add_argument("--timezone", default=None, help="IANA time zone of the site (writes a `year:` section)")
+    p.add_argument("--clear-poles", action="store_true",
+                   help="move poles mapped inside the lanes or a sidewalk's walking room to its edge "
+                        "(default: every pole stands where it was mapped)")
     p.add_argument("--no-picture", action="store_true", help="do not draw the top-down picture")
     p.set_defaults(func=cmd_import)
 

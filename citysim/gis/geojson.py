@@ -83,7 +83,7 @@ def _checked(lonlat: list, path: Path, given: list) -> list:
 
 
 def import_geojson(street_path: str | Path, lamps_path: str | Path, crs: str | None = None,
-                   lamps_within_m: float = 15.0) -> ImportedStreet:
+                   lamps_within_m: float = 15.0, clear_poles: bool = False) -> ImportedStreet:
     """Import a street (GeoJSON LineString) and its lamps (GeoJSON Points).
 
     Parameters
@@ -93,6 +93,7 @@ def import_geojson(street_path: str | Path, lamps_path: str | Path, crs: str | N
     lamps_path : GeoJSON of Point lamps (a FeatureCollection); properties as the module says.
     crs : the CRS of both files when they do not say (default EPSG:4326, lon/lat).
     lamps_within_m : the farthest a lamp may stand from the centreline, m.
+    clear_poles : move poles mapped inside the lanes or walking room to its edge.
     """
     street_path, lamps_path = Path(street_path), Path(lamps_path)
     lonlat, crs_name, props = _street_line(street_path, crs)
@@ -119,4 +120,4 @@ def import_geojson(street_path: str | Path, lamps_path: str | Path, crs: str | N
     street = ImportedStreet(name=name, centreline_m=centreline, origin_deg=(lonlat[0][1], lonlat[0][0]),
                             crs=crs_name, source=f"GeoJSON {street_path.name} and {lamps_path.name}",
                             highway=highway, cross=cross, poles=tuple(poles), entries=(), notes=notes)
-    return finish_street(street)
+    return finish_street(street, clear_poles)

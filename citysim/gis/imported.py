@@ -90,13 +90,20 @@ def slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", ascii_name).strip("_").lower() or "street"
 
 
-def finish_street(street: ImportedStreet) -> ImportedStreet:
-    """The street with its poles moved clear of the lanes and walking room."""
-    poles = clear_poles(list(street.poles), street.cross.lanes, street.cross.sidewalks)
-    moved = sum(p.d_m != q.d_m for p, q in zip(poles, street.poles, strict=True))
-    notes = street.notes + ((f"{moved} of {len(poles)} poles were mapped inside the lanes or walking room and "
-                             "stand at its edge here (their mapped offset is in their ref)",) if moved else ())
-    return dataclasses.replace(street, poles=tuple(poles), notes=notes)
+def finish_street(street: ImportedStreet, clear: bool = False) -> ImportedStreet:
+    """The street with a note on the poles mapped inside the lanes or walking room; ``clear``
+    moves those poles to the walking room's edge (their mapped offset kept in their ref)."""
+    cleared = clear_poles(list(street.poles), street.cross.lanes, street.cross.sidewalks)
+    inside = sum(p.d_m != q.d_m for p, q in zip(cleared, street.poles, strict=True))
+    if not inside:
+        return street
+    if clear:
+        note = (f"{inside} of {len(cleared)} poles were mapped inside the lanes or walking room and stand at "
+                "its edge here (--clear-poles; their mapped offset is in their ref)")
+        return dataclasses.replace(street, poles=tuple(cleared), notes=(*street.notes, note))
+    note = (f"{inside} of {len(cleared)} poles stand inside the lanes or walking room as mapped (a narrower "
+            "street than the defaults, or a centreline drawn off-centre); --clear-poles moves them to its edge")
+    return dataclasses.replace(street, notes=(*street.notes, note))
 
 
 def _poles(street: ImportedStreet) -> list[dict]:

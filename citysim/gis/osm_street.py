@@ -47,7 +47,7 @@ def _main_way(data: OsmData, joined: JoinedStreet):
     return max(joined.ways, key=lambda wr: (way_length_m(data, wr[0]), -wr[0].id))
 
 
-def import_osm(osm_path: str | Path, way: str, lamps_within_m: float = 15.0) -> ImportedStreet:
+def import_osm(osm_path: str | Path, way: str, lamps_within_m: float = 15.0, clear_poles: bool = False) -> ImportedStreet:
     """Import one street of an OSM file.
 
     Parameters
@@ -56,15 +56,17 @@ def import_osm(osm_path: str | Path, way: str, lamps_within_m: float = 15.0) -> 
     way : the street's name (case-insensitive; consecutive ways of that name are joined) or a way
         id (the chain of same-name ways through it).
     lamps_within_m : the farthest a highway=street_lamp node may stand from the centreline, m.
+    clear_poles : move poles mapped inside the lanes or walking room to its edge.
 
     Returns
     -------
     ImportedStreet in a transverse Mercator frame whose origin is the street's first node.
     """
-    return street_from_data(read_osm(osm_path), way, lamps_within_m)
+    return street_from_data(read_osm(osm_path), way, lamps_within_m, clear_poles=clear_poles)
 
 
-def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0, context: bool = True) -> ImportedStreet:
+def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0, context: bool = True,
+                     clear_poles: bool = False) -> ImportedStreet:
     """``import_osm`` on an OSM file already read (``read_osm``); ``context`` False leaves out the
     nearby ways (only the picture needs them)."""
     joined = join_street(data, str(way))
@@ -89,7 +91,7 @@ def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0, cont
         highway=main.highway, cross=cross, poles=tuple(poles), entries=tuple(entries),
         context_m=_context(data, frame, centreline, set(joined.node_ids)) if context else (), notes=notes,
         way_ids=joined.way_ids)
-    return finish_street(street)
+    return finish_street(street, clear_poles)
 
 
 def import_street(osm_path: str | Path, way_name_or_id: str, lamps_within_m: float = 15.0) -> dict:

@@ -39,18 +39,22 @@ def test_two_ways_of_one_name_are_joined_with_the_reversed_one_turned(street):
 
 
 def test_lamps_within_range_are_taken_at_their_hand_computed_s_and_d(street):
-    expected = [(30.0, 7.0), (70.0, -6.5), (85.0, None), (140.0, -7.0)]
+    expected = [(30.0, 7.0), (70.0, -6.5), (85.0, 2.0), (140.0, -7.0)]
     assert len(street.poles) == len(expected)
     for pole, (s, d) in zip(street.poles, expected, strict=True):
-        assert pole.s_m == pytest.approx(s, abs=TOL_M)
-        if d is not None:
-            assert pole.d_m == pytest.approx(d, abs=TOL_M)
+        assert pole.s_m == pytest.approx(s, abs=TOL_M) and pole.d_m == pytest.approx(d, abs=TOL_M)
     assert "osm node 101" in street.poles[0].ref
     assert street.poles[1].height_m == pytest.approx(4.5)  # the node's height tag
 
 
-def test_a_lamp_mapped_in_the_road_is_moved_to_the_walking_rooms_edge_and_says_so(street):
-    moved = street.poles[2]
+def test_a_lamp_mapped_in_the_road_stands_where_mapped_and_the_file_says_so(street):
+    pole = street.poles[2]
+    assert "osm node 106" in pole.ref and pole.d_m == pytest.approx(2.0, abs=TOL_M)
+    assert "1 of 4 poles stand inside the lanes or walking room as mapped" in street.notes[-1]
+
+
+def test_clear_poles_moves_a_lamp_mapped_in_the_road_to_the_walking_rooms_edge():
+    moved = import_osm(FIXTURE, "Teststraße", clear_poles=True).poles[2]
     assert "osm node 106" in moved.ref and "mapped at d 2" in moved.ref
     # default cross-section: 2 lanes of 3 m, 2 m sidewalks at d +-4 m, 0.5 m verge step, 0.2 m clearance
     assert moved.d_m == pytest.approx(5.7, abs=0.01)
