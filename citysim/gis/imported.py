@@ -93,6 +93,7 @@ def slug(name: str) -> str:
 def finish_street(street: ImportedStreet, clear: bool = False) -> ImportedStreet:
     """The street with a note on the poles mapped inside the lanes or walking room; ``clear``
     moves those poles to the walking room's edge (their mapped offset kept in their ref)."""
+    street = dataclasses.replace(street, notes=(*street.notes, _approaches(street)))
     cleared = clear_poles(list(street.poles), street.cross.lanes, street.cross.sidewalks)
     inside = sum(p.d_m != q.d_m for p, q in zip(cleared, street.poles, strict=True))
     if not inside:
@@ -104,6 +105,17 @@ def finish_street(street: ImportedStreet, clear: bool = False) -> ImportedStreet
     note = (f"{inside} of {len(cleared)} poles stand inside the lanes or walking room as mapped (a narrower "
             "street than the defaults, or a centreline drawn off-centre); --clear-poles moves them to its edge")
     return dataclasses.replace(street, notes=(*street.notes, note))
+
+
+def _approaches(street: ImportedStreet) -> str:
+    """A note on the stretches before the first lamp zone and after the last (half-way cuts)."""
+    from citysim.gis.picture import zone_bounds_m
+
+    zones = zone_bounds_m([p.s_m for p in street.poles], street.length_m)
+    before, after = zones[0][0], street.length_m - zones[-1][1]
+    short = " (road users entering at a street end with no approach appear inside a lamp zone)" \
+        if min(before, after) < 1.0 else ""
+    return f"approaches: {before:.1f} m before the first lamp zone, {after:.1f} m after the last{short}"
 
 
 def _poles(street: ImportedStreet) -> list[dict]:
