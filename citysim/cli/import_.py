@@ -100,7 +100,9 @@ def import_text(args):
 
 def cmd_import(args) -> int:
     from citysim.gis.errors import GisInputError
+    from citysim.gis.imported import plural
     from citysim.gis.picture import blind_stretches_m, draw_street
+    from citysim.gis.writer import write_text
 
     try:
         text, data, street = import_text(args)
@@ -112,11 +114,10 @@ def cmd_import(args) -> int:
     picture = out.with_suffix(".png")
     if not args.no_picture:
         draw_street(data, picture, street.context_m)
-    from citysim.gis.writer import write_text
-
     write_text(text, out)
     blind, covered = blind_stretches_m(data)
-    print(f"{street.name}: {street.length_m:.0f} m, {len(street.poles)} lamps, {len(street.entries)} side entries; "
+    print(f"{street.name}: {street.length_m:.0f} m, {len(street.poles)} lamps, "
+          f"{plural(len(street.entries), 'side entry', 'side entries')}; "
           f"cameras see {covered:.0%} of the centreline within 25 m ({len(blind)} blind stretches)")
     print(f"scenario written to {out}" + ("" if args.no_picture else f"; top-down picture: {picture}"))
     return 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from citysim.gis.geometry import point_at, project
 from citysim.gis.join import ROAD_CLASSES
 from citysim.gis.osm import OsmData
 
@@ -54,8 +55,6 @@ def _side(heading_rad: float, dx: float, dy: float) -> str:
 def raw_entries(data: OsmData, chain_nodes: tuple[int, ...], own_ways: set[int], frame, centreline) -> list[dict]:
     """Entries at the street's inner nodes shared with other highways (before shares are set):
     dicts of s_m, side, name, kind."""
-    from citysim.gis.geometry import point_at, project
-
     inner = set(chain_nodes[1:-1])
     length = project(centreline, centreline[-1])[0]
     found: dict[tuple[float, str, str], set[str]] = {}

@@ -84,6 +84,11 @@ def checked_centreline(points: list[tuple[float, float]], name: str) -> tuple[tu
     return tuple(pts)
 
 
+def plural(count: int, one: str, many: str) -> str:
+    """'1 side entry', '4 side entries'."""
+    return f"{count} {one if count == 1 else many}"
+
+
 def slug(name: str) -> str:
     """A scenario name from a street name: ASCII letters, digits and underscores ('ß' -> 'ss')."""
     ascii_name = unicodedata.normalize("NFKD", name.replace("ß", "ss")).encode("ascii", "ignore").decode()
@@ -145,7 +150,7 @@ def scenario_data(street: ImportedStreet, rates: dict[str, float] | None = None,
     data = {
         "name": slug(street.name),
         "description": f"{street.name}, {street.length_m:.0f} m ({street.highway}), {len(street.poles)} surveyed "
-                       f"lamps, {len(street.entries)} side entries; imported from {street.source}.",
+                       f"lamps, {plural(len(street.entries), 'side entry', 'side entries')}; imported from {street.source}.",
         "seed": 1, "duration_s": duration_s, "start_hour": 22.0, "physics_hz": 30,
         "street": {
             "length_m": round(street.length_m, 2),

@@ -5,7 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from citysim.gis.entries import raw_entries, with_shares
-from citysim.gis.imported import ImportedStreet, checked_centreline, finish_street, scenario_data
+from citysim.gis.imported import (
+    ImportedStreet,
+    checked_centreline,
+    finish_street,
+    plural,
+    scenario_data,
+)
 from citysim.gis.join import JoinedStreet, join_street, way_length_m
 from citysim.gis.lamps import LampPoint, match_lamps
 from citysim.gis.osm import OsmData, read_osm
@@ -83,7 +89,7 @@ def street_from_data(data: OsmData, way: str, lamps_within_m: float = 15.0, cont
     notes = (f"street: OSM way{'s' if len(joined.ways) > 1 else ''} {ways_text}, highway={main.highway}",
              *cross.notes,
              f"lamps: {len(poles)} highway=street_lamp nodes within {lamps_within_m:g} m of the centreline",
-             f"side entries: {len(entries)} nodes shared with other highways")
+             f"side entries: {plural(len(entries), 'node', 'nodes')} shared with other highways")
     street = ImportedStreet(
         name=joined.name, centreline_m=centreline, origin_deg=(lonlat[0][1], lonlat[0][0]), crs=WGS84,
         source=f"OpenStreetMap way{'s' if len(joined.ways) > 1 else ''} {', '.join(map(str, joined.way_ids))} "
