@@ -28,6 +28,8 @@ ALLOWED_STAGES = {
     # a year is a table of runs through sim; its report section reads year.json, not the package
     "year": {"config", "world", "control", "metrics", "fast", "sim"},
     "report": {"config", "world", "render", "control", "metrics", "fast", "sim", "sweep"},
+    # the importer writes scenario files; it never builds or runs a world
+    "gis": {"config"},
 }
 #: Compiled per-pixel kernels may be long: numba cannot call helpers that cheaply.
 LONG_MODULES_ALLOWED = {"citysim/render/kernels.py"}
