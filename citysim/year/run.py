@@ -14,6 +14,7 @@ from pathlib import Path
 from citysim.year.annual import annual_figures
 from citysim.year.checks import run_check_nights
 from citysim.year.counts_csv import coverage
+from citysim.year.money import add_money
 from citysim.year.plan import YearPlan
 from citysim.year.table import build_table
 from detector.outdir import staged_output
@@ -21,11 +22,13 @@ from detector.outdir import staged_output
 
 def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, workers: int = 1,
              fidelity: str = "full", check_nights: int = 0, progress: bool = True,
-             scenario_file: str | None = None) -> dict:
-    """Build the table, sum the year, run the check nights; write out_dir/year.json; return its dict."""
+             scenario_file: str | None = None, sensor_model=None) -> dict:
+    """Build the table, sum the year, cost it, run the check nights; write out_dir/year.json; return its
+    dict. ``sensor_model``: fast fidelity's model to use (default: the scenario's, looked up or calibrated)."""
     table = build_table(plan.scenario, plan.year, plan.dark_hours, names, workers=workers, fidelity=fidelity,
-                        progress=progress)  # fmt: skip
+                        progress=progress, sensor_model=sensor_model)  # fmt: skip
     figures = annual_figures(table, plan.pieces, plan.scenario, plan.year)
+    money = add_money(figures["controllers"], plan.scenario, plan.year, names)
     y = plan.year
     result = {
         "scenario": plan.scenario.name, "scenario_file": scenario_file,
@@ -37,7 +40,7 @@ def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, w
         "fidelity": fidelity, "hour_runs": len(table.cells), "table_wall_s": table.wall_s,
         "sample_s": y.sample_s, "idle_sample_s": y.idle_sample_s,
         "warmup_s": table.cells[0].warmup_s if table.cells else None,
-        **figures, "table": table.as_dict(), "check_nights": [],
+        **figures, "money": money, "table": table.as_dict(), "check_nights": [],
     }  # fmt: skip
     if check_nights:
         result["check_nights"] = run_check_nights(plan, table, check_nights, names, workers=workers,
