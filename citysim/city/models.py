@@ -2,7 +2,8 @@
 
 Fast fidelity's sensor model (``citysim.fast``) describes what the detector does with a road
 user at a given forward distance, bearing, speed and light *relative to the camera*: it depends
-on the camera (intrinsics, height, tilt, frame rate), the environment (light, weather, noise,
+on the camera (intrinsics, height, tilt, heading relative to the street, frame rate; the
+scenario's ``lamps.camera`` with its file), the environment (light, weather, noise,
 insects) and the lamps' dim level, not on where the street runs. ``camera_key`` hashes exactly
 those (plus the traffic kinds the detector reports, the idle-frame stride, the detector's model
 file and the model version), so streets that share it share one model. ``city_models`` finds,
@@ -27,17 +28,17 @@ from citysim.sim.calibration import (
     model_path,
     sensor_model_for,
 )
-from citysim.world.street import build_street
 
 
 def camera_key(job: StreetJob) -> str:
     """A hash of what a street's sensor model depends on apart from the street's geometry."""
     scenario = job.scenario
-    street = build_street(scenario)
+    camera = scenario.lamps.camera
     parts = {
         "version": MODEL_VERSION,
-        "cameras": sorted({json.dumps([site.camera.model_dump(mode="json"), site.pole_height_m], sort_keys=True)
-                           for site in street.lamps}),
+        # intrinsics, height, tilt, heading relative to the street, frame rate; not where poles stand
+        "camera": scenario.lamps.camera_model.model_dump(mode="json", exclude={"x_m", "y_m"}),
+        "headings_deg": [camera.headings_deg, camera.back_heading_deg],
         "environment": scenario.environment.model_dump(mode="json"),
         "dim_level": scenario.lamps.luminaire.dim_level,
         "idle_frame_stride": scenario.simulation.idle_frame_stride,
