@@ -46,7 +46,7 @@ def plot_map(folder: Path, city: dict) -> Path:
         if street["lamps_m"]:
             lx, ly = zip(*street["lamps_m"], strict=True)
             ax.scatter(lx, ly, s=14, color="#202020", zorder=2)
-        mid = street["centreline_m"][len(street["centreline_m"]) // 2]
+        mid = (sum(xs) / len(xs), sum(ys) / len(ys))  # the label near the street's middle
         label = street["name"] + ("" if payback is None else f"\n{payback:.1f} y")
         ax.annotate(label, mid, textcoords="offset points", xytext=(0, 9), ha="center", fontsize=7)
     fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax,
