@@ -1,11 +1,11 @@
 """City benchmark: one city's year on 1 and on 2 local Dask workers (wall, CPU, per-worker peak memory).
 
-Figures, never pass/fail. The city is three shipped scenarios (suburban_night, its two-way
-variant and rural_road) at suburban_night's site, in fast mode with always-on, the oracle, PIR and
-detector_located, at a reduced ``sample_s`` (the year's table measures that long per traffic
-level), so the bench takes minutes rather than the real city's hours. The sensor models are found
-or calibrated once before the timed runs (the first bench on a fresh clone calibrates the two
-scenarios that ship without one, a few minutes; the cache keeps them). Wall times include starting
+Figures, never pass/fail. The city is the shipped suburban_night and two
+streets the bench derives from it (a longer one with 15 lamps, a shorter and busier one with 7),
+at suburban_night's site, in fast mode with always-on, the oracle, PIR and detector_located, at a
+reduced ``sample_s`` (the year's table measures that long per traffic level), so the bench takes
+minutes rather than a real city's hours. All three share suburban_night's camera and environment,
+hence one sensor model: the shipped one, found before the timed runs (no calibration). Wall times include starting
 the local cluster, as a user's run would. CPU is the streets' tasks' process time (workers) plus
 the client's. Per worker, the peak RSS after each of its streets, in order: flat means a worker
 does not grow from street to street.
@@ -14,6 +14,7 @@ does not grow from street to street.
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import tempfile
 import time
@@ -22,16 +23,30 @@ from pathlib import Path
 import yaml
 
 REPO = Path(__file__).resolve().parents[2]
-STREETS = ("suburban_night.yaml", "suburban_night_two_way.yaml", "rural_road.yaml")
+#: (name, street length m, lamps, traffic multiplier) of the bench's streets; the first is suburban_night.
+STREETS = (("suburban_night", 390.0, 11, 1.0), ("suburban_long", 510.0, 15, 0.8), ("suburban_busy", 240.0, 7, 2.0))
 CONTROLLERS = ("always_on", "oracle", "pir", "detector_located")
 SITE = {"latitude_deg": 52.52, "longitude_deg": 13.405, "timezone": "Europe/Berlin", "year": 2025}
 
 
 def write_bench_city(folder: Path) -> Path:
-    """CITY.yaml listing the shipped scenarios by absolute path; its path."""
+    """The three streets' scenario files and CITY.yaml listing them in ``folder``; the city file's path."""
+    from citysim.config.kinds import TARGET_KINDS
+
+    base = yaml.safe_load((REPO / "scenarios" / "suburban_night.yaml").read_text())
+    base["lamps"]["camera"]["file"] = str(REPO / "scenarios" / base["lamps"]["camera"]["file"])
+    files = []
+    for name, length_m, lamps, factor in STREETS:
+        data = copy.deepcopy(base)
+        data["name"], data["street"]["length_m"], data["lamps"]["count"] = name, length_m, lamps
+        data["street"]["crossings_x_m"] = [x for x in data["street"]["crossings_x_m"] if x < length_m - 20]
+        for kind, spec in data["traffic"]["classes"].items():
+            if kind in TARGET_KINDS and "rate_per_hour" in spec:  # animals belong to the environment
+                spec["rate_per_hour"] *= factor
+        (folder / f"{name}.yaml").write_text(yaml.safe_dump(data))
+        files.append(f"{name}.yaml")
     path = folder / "bench_city.yaml"
-    path.write_text(yaml.safe_dump({"name": "bench_city", "site": SITE,
-                                    "streets": [str(REPO / "scenarios" / s) for s in STREETS]}))  # fmt: skip
+    path.write_text(yaml.safe_dump({"name": "bench_city", "site": SITE, "streets": files}))
     return path
 
 
