@@ -78,7 +78,7 @@ def street_year(job: StreetJob, sensor_model=None) -> tuple[dict, dict]:
                           fidelity=job.fidelity, progress=False, scenario_file=job.source,
                           sensor_model=sensor_model)  # fmt: skip
     facts = {"street": job.name, "fingerprint": job.fingerprint(), "host": socket.gethostname(), "pid": os.getpid(),
-             "wall_s": time.perf_counter() - wall0, "cpu_s": time.process_time() - cpu0,
+             "wall_s": time.perf_counter() - wall0, "cpu_s": time.process_time() - cpu0, "finished_unix_s": time.time(),
              # ru_maxrss is KiB on Linux: the worker process's peak so far (flat across streets = no growth)
              "worker_peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}  # fmt: skip
     return result, facts

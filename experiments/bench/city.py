@@ -54,7 +54,7 @@ def worker_figures(out_dir: Path, names: list[str]) -> tuple[float, dict[int, li
     """(CPU seconds of the streets' tasks, per worker pid its peak RSS MB after each street, in order)."""
     tasks = [json.loads((out_dir / "streets" / n / "task.json").read_text()) for n in names]
     peaks: dict[int, list[float]] = {}
-    for task in sorted(tasks, key=lambda t: t["wall_s"]):
+    for task in sorted(tasks, key=lambda t: t["finished_unix_s"]):  # each worker's streets in the order run
         peaks.setdefault(task["pid"], []).append(round(task["worker_peak_rss_mb"], 1))
     return sum(t["cpu_s"] for t in tasks), peaks
 
@@ -65,7 +65,7 @@ def bench_city(sample_s: float = 120.0, worker_counts: tuple[int, ...] = (1, 2))
     from citysim.city.run import CityOptions, city_jobs, run_city
     from citysim.city.spec import load_city
 
-    print(f"== city: {len(STREETS)} shipped streets' years (fast, sample_s {sample_s:g} s, "
+    print(f"== city: {len(STREETS)} streets' years (fast, sample_s {sample_s:g} s, "
           f"{', '.join(CONTROLLERS)}) on 1 vs 2 local Dask workers ==")  # fmt: skip
     out: dict = {"streets": len(STREETS), "sample_s": sample_s}
     with tempfile.TemporaryDirectory(prefix="citysim-city-bench-") as tmp:
