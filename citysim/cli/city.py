@@ -19,7 +19,8 @@ def epilog() -> str:
 
     lines = ["costs (the city file's `costs:` section replaces every street's own; amounts in the year's currency):"]
     for name, field in CostsSpec.model_fields.items():
-        lines.append(f"  {name} (default {'see below' if field.default is None else field.default}): "
+        default = "the year section's, else as stated" if field.default is None else field.default
+        lines.append(f"  {name} (default {default}): "
                      f"{field.description}")
     return controller_list() + "\n\n" + "\n".join(lines)
 
