@@ -120,6 +120,7 @@ def write_city(out_dir: Path, result: dict) -> tuple[Path, Path]:
     from citysim.city.runner import write_atomic
 
     json_path, csv_path = Path(out_dir) / "city.json", Path(out_dir) / "city.csv"
-    write_atomic(json_path, json.dumps(result, indent=2, sort_keys=False) + "\n")
-    write_atomic(csv_path, csv_text(result))
+    scratch = Path(out_dir) / "streets"  # a killed write leaves its temporary file there, not in DIR
+    write_atomic(json_path, json.dumps(result, indent=2, sort_keys=False) + "\n", scratch)
+    write_atomic(csv_path, csv_text(result), scratch)
     return json_path, csv_path

@@ -42,12 +42,17 @@ def street_dir(out_dir: Path, name: str) -> Path:
     return Path(out_dir) / "streets" / name
 
 
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file beside it and a rename: whole or absent."""
+def write_atomic(path: Path, text: str, tmp_dir: Path | None = None) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename: whole or absent. ``tmp_dir``
+    (same file system; default ``path``'s folder) holds the temporary file, so a run killed while
+    writing leaves nothing beside the outputs that the next run's folder check would refuse."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=tmp_dir or path.parent)
     with os.fdopen(fd, "w") as fh:
         fh.write(text)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # as an ordinary file would be, not mkstemp's owner-only mode
     os.replace(tmp, path)
 
 
