@@ -71,3 +71,21 @@ def test_a_bad_cost_field_is_named_in_the_error():
     data = {**toy_mapping(), "costs": {"lifetime_years": 0}}
     with pytest.raises(ScenarioError, match=r"costs\.lifetime_years"):
         scenario_from_mapping(data, source="toy")
+
+
+def test_the_year_table_shows_the_money_and_what_it_assumes():
+    from citysim.report.year_section import MONEY_HEAD, money_facts, money_rows
+
+    prices = prices_of(COSTS)
+    controllers = {label: {"energy_kwh_per_year": kwh} for label, kwh in (("always_on", 5000.0), ("pir", 3000.0))}
+    for label, money in money_figures({k: v["energy_kwh_per_year"] for k, v in controllers.items()}, {}, 4, COSTS,
+                                      prices).items():  # fmt: skip
+        controllers[label].update(money)
+    result = {"currency": "EUR", "controllers": controllers,
+              "money": {"poles": 4, **vars(prices)}}  # fmt: skip
+    rows = money_rows(result)
+    assert [r[0] for r in rows] == ["always_on", "pir"] and len(rows[1]) == len(MONEY_HEAD)
+    # pir: 4 x (50 + 100 + 100) = 1000 capex; 4 x 7 = 28 a year; 2000 x 0.5 - 28 = 972 a year
+    assert rows[1][1:5] == ["1,000 EUR", "28 EUR", "972 EUR", f"{1000 / 972:.1f} y"]
+    assert "4 poles at 0.5 EUR/kWh" in money_facts(result) and "10 % a year" in money_facts(result)
+    assert money_rows({"currency": "EUR", "controllers": {"always_on": {"energy_kwh_per_year": 1.0}}}) == []
