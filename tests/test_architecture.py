@@ -27,6 +27,8 @@ ALLOWED_STAGES = {
     "sweep": {"config", "world", "control", "metrics", "fast", "sim"},
     # a year is a table of runs through sim; its report section reads year.json, not the package
     "year": {"config", "world", "control", "metrics", "fast", "sim"},
+    # a city is many streets' years on Dask; its report reads city.json, not the package
+    "city": {"config", "world", "control", "metrics", "fast", "sim", "year", "gis"},
     "report": {"config", "world", "render", "control", "metrics", "fast", "sim", "sweep"},
     # the importer writes scenario files; it never builds or runs a world
     "gis": {"config"},

@@ -11,13 +11,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from citysim.cli import calibrate, detect, import_, plot, render, run, sweep, year
+from citysim.cli import calibrate, city, detect, import_, plot, render, run, sweep, year
 from citysim.cli.common import controller_list, user_errors
 from detector.cliargs import USAGE_EXIT, Parser
 from detector.outdir import exit_on_terminate
 
 #: The commands in the order `citysim --help` lists them.
-COMMANDS = (run, render, year, sweep, calibrate, detect, plot, import_)
+COMMANDS = (run, render, year, city, sweep, calibrate, detect, plot, import_)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -23,6 +23,7 @@ from typing import Any, Literal
 from pydantic import Field, ValidationError, create_model, field_validator, model_validator
 
 from citysim.config.base import FieldPathError, ScenarioError, Spec, describe_validation_error
+from citysim.config.costs import CostsSpec
 from citysim.config.kinds import AGENT_KINDS
 from citysim.config.street import LampsSpec, StreetSpec
 from citysim.config.traffic import TrafficSpec
@@ -187,6 +188,7 @@ class Scenario(Spec):
     simulation: SimulationSpec = SimulationSpec()
     controllers: tuple[ControllerSpec, ...] = (ControllerSpec(name="always_on"),)
     year: YearSpec | None = Field(default=None, description="site, tariff and traffic by day for `citysim year`")
+    costs: CostsSpec = Field(default=CostsSpec(), description="hardware, upkeep and energy prices for payback and NPV")
 
     @model_validator(mode="before")
     @classmethod

@@ -14,6 +14,7 @@ from pathlib import Path
 from citysim.year.annual import annual_figures
 from citysim.year.checks import run_check_nights
 from citysim.year.counts_csv import coverage
+from citysim.year.money import add_money
 from citysim.year.plan import YearPlan
 from citysim.year.table import build_table
 from detector.outdir import staged_output
@@ -21,8 +22,8 @@ from detector.outdir import staged_output
 
 def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, workers: int = 1,
              fidelity: str = "full", check_nights: int = 0, progress: bool = True,
-             scenario_file: str | None = None) -> dict:
-    """Build the response table, sum the year, run the check nights; write out_dir/year.json.
+             scenario_file: str | None = None, sensor_model=None) -> dict:
+    """Build the response table, sum the year, cost it, run the check nights; write out_dir/year.json.
 
     Parameters
     ----------
@@ -42,18 +43,24 @@ def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, w
         Show a progress bar.
     scenario_file : str, optional
         The scenario's path, recorded in year.json.
+    sensor_model : SensorModel, optional
+        Fast fidelity's model to use (default: the scenario's, looked up or calibrated); a city
+        passes the one it shares between streets with the same camera.
 
     Returns
     -------
     dict
         year.json's contents: per controller ``energy_kwh_per_year``, ``savings_vs_always_on``,
         ``cost_per_year``, ``co2_kg_per_year``, ``aeci_wh_per_m2`` (Wh/m²), ``lit_on_entry_rate``
-        and its 95 % interval, ``zone_entries_per_year``, ``dark_s_per_year``; the table and the
+        and its 95 % interval, ``zone_entries_per_year``, ``dark_s_per_year``, and the money against always-on
+        (``capex``, ``opex_per_year``, ``money_saved_per_year``, ``payback_years``, ``npv``,
+        ``co2_avoided_kg_over_lifetime``); the table and the
         check nights.
     """
     table = build_table(plan.scenario, plan.year, plan.dark_hours, names, workers=workers, fidelity=fidelity,
-                        progress=progress)  # fmt: skip
+                        progress=progress, sensor_model=sensor_model)  # fmt: skip
     figures = annual_figures(table, plan.pieces, plan.scenario, plan.year)
+    money = add_money(figures["controllers"], plan.scenario, plan.year, names)
     y = plan.year
     result = {
         "scenario": plan.scenario.name, "scenario_file": scenario_file,
@@ -65,7 +72,7 @@ def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, w
         "fidelity": fidelity, "hour_runs": len(table.cells), "table_wall_s": table.wall_s,
         "sample_s": y.sample_s, "idle_sample_s": y.idle_sample_s,
         "warmup_s": table.cells[0].warmup_s if table.cells else None,
-        **figures, "table": table.as_dict(), "check_nights": [],
+        **figures, "money": money, "table": table.as_dict(), "check_nights": [],
     }  # fmt: skip
     if check_nights:
         result["check_nights"] = run_check_nights(plan, table, check_nights, names, workers=workers,

@@ -151,9 +151,11 @@ def run_cell(scenario: Scenario, cell: Cell, names: list[str] | None, fidelity: 
 
 
 def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], names: list[str] | None = None,
-                *, workers: int = 1, fidelity: str = "full", progress: bool = True) -> ResponseTable:
+                *, workers: int = 1, fidelity: str = "full", progress: bool = True,
+                sensor_model=None) -> ResponseTable:
     """Run every cell (``workers`` processes) and gather the table; a bar shows simulated seconds
-    done, their rate and the time left."""
+    done, their rate and the time left. ``sensor_model``: fast fidelity's model (default: the
+    scenario's own, ``sensor_model_for``; a city shares one among streets of one camera)."""
     import time
 
     cells = plan_cells(scenario, year, dark_hours)
@@ -167,7 +169,9 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
     # the scenario's own sensor model for every cell: a cell's variant differs in traffic only, but an
     # idle cell (no traffic) lists fewer kinds, so looking its model up by its own key calibrated a
     # second model on empty nights (2 min on a fresh clone) that knew no road user
-    model = sensor_model_for(scenario, progress=progress) if fidelity == "fast" and needs_sensor_model(specs) else None
+    model = None
+    if fidelity == "fast" and needs_sensor_model(specs):
+        model = sensor_model if sensor_model is not None else sensor_model_for(scenario, progress=progress)
     results: dict[Cell, tuple[dict, dict]] = {}
     if workers <= 1:
         for cell in cells:

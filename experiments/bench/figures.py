@@ -15,7 +15,8 @@ measured in the same run on the same frames:
 * whole night: every controller of suburban_night through one comparison on 2 workers, the
   first 10 minutes at full fidelity scaled to the night (``--night``: the whole night, measured;
   long), and fast mode from a sample of each hour of the night and as one whole-night run;
-* year: ``citysim year`` of suburban_night in fast mode, every controller.
+* year: ``citysim year`` of suburban_night in fast mode, every controller;
+* city: a three-street city's year on 1 and 2 Dask workers (wall, CPU, per-worker peak memory).
 
 Each whole-night and year figure is printed beside the figure measured before.
 """
@@ -328,8 +329,14 @@ def bench_year_fast() -> dict:
     return bench_year()
 
 
+def bench_city() -> dict:
+    from experiments.bench.city import bench_city as city
+
+    return city()
+
+
 SECTIONS = (bench_detector, bench_render, bench_sim, bench_traffic, bench_sweep, bench_night_sample, bench_shared_frames,
-            bench_night_fast, bench_night_fast_whole, bench_year_fast)
+            bench_night_fast, bench_night_fast_whole, bench_year_fast, bench_city)
 
 
 def main(argv: list[str] | None = None) -> int:

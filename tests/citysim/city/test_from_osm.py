@@ -1,0 +1,57 @@
+"""The city file's `osm:` selection through the OpenStreetMap import (citysim.gis).
+
+citysim.gis is built in parallel with the city; these tests run as soon as it is in the tree
+(the coordinator enables them by merging it) and are skipped until then.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+
+import pytest
+import yaml
+
+from citysim.city.from_osm import safe_name
+from citysim.city.layout import lamp_sd_m
+from citysim.city.run import CityOptions, city_jobs
+from citysim.city.spec import load_city
+
+GIS = importlib.util.find_spec("citysim.gis") is not None
+
+#: One residential way of 200 m running east at 51.2 N with 5 street lamps 8 m north of it, and a
+#: footway with none (which the selection must leave out).
+TINY_OSM = """<?xml version='1.0' encoding='UTF-8'?>
+<osm version="0.6" generator="citysim tests">
+  <node id="1" lat="51.2000000" lon="6.8000000"/>
+  <node id="2" lat="51.2000000" lon="6.8028700"/>
+  <node id="3" lat="51.2010000" lon="6.8000000"/>
+  <node id="4" lat="51.2010000" lon="6.8010000"/>
+  {lamps}
+  <way id="100"><nd ref="1"/><nd ref="2"/><tag k="highway" v="residential"/><tag k="name" v="Elm Street"/></way>
+  <way id="101"><nd ref="3"/><nd ref="4"/><tag k="highway" v="footway"/></way>
+</osm>
+"""
+
+
+def test_street_names_become_safe_file_names():
+    assert safe_name("Dopplerweg / Am Hang") == "Dopplerweg_Am_Hang"
+    assert safe_name("***") == "street"
+
+
+@pytest.mark.skipif(not GIS, reason="citysim.gis (the OpenStreetMap import) is not merged yet")
+def test_an_osm_city_imports_the_selected_ways_as_scenario_files(tmp_path):
+    lamps = "\n  ".join(
+        f'<node id="{10 + i}" lat="51.2000720" lon="{6.8002 + i * 0.0006:.7f}"><tag k="highway" v="street_lamp"/></node>'
+        for i in range(5)
+    )
+    (tmp_path / "tiny.osm").write_text(TINY_OSM.format(lamps=lamps))
+    city_file = tmp_path / "city.yaml"
+    city_file.write_text(yaml.safe_dump({
+        "osm": {"file": "tiny.osm", "highway": ["residential"], "min_lamps": 4},
+        "site": {"latitude_deg": 51.2, "longitude_deg": 6.8, "timezone": "Europe/Berlin"},
+    }))  # fmt: skip
+    out = tmp_path / "out"
+    jobs = city_jobs(load_city(city_file), city_file, out, CityOptions(controllers=("pir",)))
+    assert len(jobs) == 1  # the footway has no lamps
+    assert (out / "osm_streets").is_dir() and len(list((out / "osm_streets").glob("*.yaml"))) == 1
+    assert len(lamp_sd_m(jobs[0].scenario)) == 5  # surveyed poles or a count: five lamps
