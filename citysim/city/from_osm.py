@@ -1,8 +1,8 @@
 """The city file's ``osm:`` selection, through the OpenStreetMap import (``citysim.gis``).
 
-``osm_street_files`` asks ``citysim.gis.gis.select_streets(osm_path, highway_classes, min_lamps)`` for
-the candidate ways (each with a ``name``), imports each with ``citysim.gis.import_street(osm_path,
-candidate, lamps_within_m)`` into scenario data and writes it with ``citysim.gis.write_scenario(data,
+``osm_street_files`` asks ``citysim.gis.select_streets(osm_path, highway_classes, min_lamps)`` for
+the candidate streets (each with a ``name`` and its ``way_ids``), imports each by its first way's id
+with ``citysim.gis.import_street(osm_path, way_id, lamps_within_m)`` into scenario data and writes it with ``citysim.gis.write_scenario(data,
 path)`` to DIR/osm_streets/<name>.yaml: ordinary scenario files the planner can read and edit,
 which the city then runs like the files it lists under ``streets:``. Names are made file-safe and
 unique (``-2``, ``-3``, ... in the order the import returns them).
@@ -10,11 +10,11 @@ unique (``-2``, ``-3``, ... in the order the import returns them).
 
 from __future__ import annotations
 
-import importlib
 import re
 from pathlib import Path
 
 from citysim.city.spec import OsmSelection, street_path
+from citysim.gis import import_street, select_streets, write_scenario
 
 OSM_DIR = "osm_streets"
 
@@ -26,20 +26,19 @@ def safe_name(name: str) -> str:
 
 def osm_street_files(selection: OsmSelection, city_file: Path, out_dir: Path) -> list[Path]:
     """Import the selected ways of the extract into DIR/osm_streets/*.yaml; their paths, in import order."""
-    # the import package (citysim.gis) is looked up when an `osm:` city runs, so a city of scenario
-    # files never needs it; the names are its contract: select_streets, import_street, write_scenario
-    gis = importlib.import_module("citysim.gis")
     osm_path = street_path(city_file, selection.file)
     folder = Path(out_dir) / OSM_DIR
     folder.mkdir(parents=True, exist_ok=True)
     paths: list[Path] = []
     taken: dict[str, int] = {}
-    for candidate in gis.select_streets(osm_path, list(selection.highway), selection.min_lamps):
+    for candidate in select_streets(osm_path, tuple(selection.highway), selection.min_lamps,
+                                    selection.lamps_within_m):
         name = safe_name(getattr(candidate, "name", None) or "street")
         taken[name] = taken.get(name, 0) + 1
         if taken[name] > 1:
             name = f"{name}-{taken[name]}"
         path = folder / f"{name}.yaml"
-        gis.write_scenario(gis.import_street(osm_path, candidate, selection.lamps_within_m), path)
+        # by the way's id, not the name: two streets of one name elsewhere in the extract stay apart
+        write_scenario(import_street(osm_path, str(candidate.way_ids[0]), selection.lamps_within_m), path)
         paths.append(path)
     return paths

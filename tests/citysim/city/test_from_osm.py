@@ -1,22 +1,13 @@
-"""The city file's `osm:` selection through the OpenStreetMap import (citysim.gis).
-
-citysim.gis is built in parallel with the city; these tests run as soon as it is in the tree
-(the coordinator enables them by merging it) and are skipped until then.
-"""
+"""The city file's `osm:` selection through the OpenStreetMap import (citysim.gis)."""
 
 from __future__ import annotations
 
-import importlib.util
-
-import pytest
 import yaml
 
 from citysim.city.from_osm import safe_name
 from citysim.city.layout import lamp_sd_m
 from citysim.city.run import CityOptions, city_jobs
 from citysim.city.spec import load_city
-
-GIS = importlib.util.find_spec("citysim.gis") is not None
 
 #: One residential way of 200 m running east at 51.2 N with 5 street lamps 8 m north of it, and a
 #: footway with none (which the selection must leave out).
@@ -38,7 +29,6 @@ def test_street_names_become_safe_file_names():
     assert safe_name("***") == "street"
 
 
-@pytest.mark.skipif(not GIS, reason="citysim.gis (the OpenStreetMap import) is not merged yet")
 def test_an_osm_city_imports_the_selected_ways_as_scenario_files(tmp_path):
     lamps = "\n  ".join(
         f'<node id="{10 + i}" lat="51.2000720" lon="{6.8002 + i * 0.0006:.7f}"><tag k="highway" v="street_lamp"/></node>'
