@@ -17,6 +17,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from citysim.report.common import controller_color, fmt_num, fmt_pct, fmt_quantity, save  # noqa: E402
+from citysim.report.wording import BELOW_FULL  # noqa: E402
+from citysim.report.year_entries import FEW_ENTRIES_RULE, entries_cell, entries_of, too_few  # noqa: E402
 
 MONTHS = ("Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec")
 MONTHLY_PLOT = "monthly_energy.png"
@@ -29,10 +31,11 @@ TABLE_HOWTO = (
     "Per controller over the whole year: energy, its saving against always-on, cost at the scenario's "
     "tariff, CO2 at its grid factor, and the AECI (EN 13201-5's annual energy per square metre lit, "
     "Wh/m2: lower is better, and it compares streets of different sizes). Lit on entry is the share "
-    "of all zone entries of the year whose lamp was already at full level; dark s is the seconds road "
-    "users spent in a zone below full, summed over the year. In brackets beside lit on entry, a 95 % "
-    "interval: the road users of the table's traffic-level runs resampled, so it shows how far the rate "
-    "could be off from those few hundred entries alone (not the sensor model's own error)."
+    "of all zone entries of the year whose lamp was already at full level; below-full s is the seconds road "
+    f"users spent in a zone whose lamp was {BELOW_FULL}, summed over the year. In brackets beside lit on "
+    "entry, a 95 % interval: the road users of the table's traffic-level runs resampled, so it shows how far "
+    "the rate could be off from those few hundred entries alone (not the sensor model's own error); then "
+    "the entries the rate is read from."
 )
 
 
@@ -65,12 +68,13 @@ def _rows(result: dict) -> list[list[str]]:
     for label, f in result["controllers"].items():
         rows.append([label, fmt_quantity(f["energy_kwh_per_year"], "kWh"), fmt_pct(f["savings_vs_always_on"]),
                      fmt_quantity(f["cost_per_year"], cur), fmt_quantity(f["co2_kg_per_year"], "kg"),
-                     fmt_quantity(f["aeci_wh_per_m2"], "Wh/m2"), lit_with_interval(f),
+                     fmt_quantity(f["aeci_wh_per_m2"], "Wh/m2"),
+                     lit_with_interval(f) + entries_cell(label, f, entries_of(result, label)),
                      fmt_num(f["dark_s_per_year"])])  # fmt: skip
     return rows
 
 
-HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "dark s / year"]
+HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "below-full s / year"]
 
 
 def lit_with_interval(figures: dict) -> str:
@@ -95,11 +99,17 @@ def year_table(result: dict) -> str:
     lines = ["  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True)))
              for r in rows]  # fmt: skip
     # a rate read off a few hundred entries cannot show a 1-3 % dark share reliably: say how few
-    note = (f"lit on entry and dark s / year are read from {sampled_entries(result):,} zone entries measured in the "
+    note = (f"lit on entry and below-full s / year are read from {sampled_entries(result):,} zone entries measured in the "
             f"table's traffic-level runs ({fmt_num(result['sample_s'])} s each); in brackets a 95 % interval from "
             "resampling their road users; a whole night in fast mode (citysim run --fidelity fast --duration "
             "28800) counts thousands")
-    return "\n".join([lines[0], "-" * len(lines[0]), *lines[1:], note])
+    return "\n".join([lines[0], "-" * len(lines[0]), *lines[1:], note, *_few_entries(result)])
+
+
+def _few_entries(result: dict) -> list[str]:
+    """The warning under a year table with a rate too few entries to read (``year_entries``), or none."""
+    flagged = [label for label, f in result["controllers"].items() if too_few(label, f, entries_of(result, label))]
+    return [FEW_ENTRIES_RULE] if flagged else []
 
 
 def _html_table(head: list[str], rows: list[list[str]]) -> str:
@@ -158,5 +168,6 @@ def year_section(folder: str | Path) -> str:
     figure = (f'<figure id="fig-monthly_energy"><img alt="{MONTHLY_PLOT}" src="data:image/png;base64,{data}">'
               f"<figcaption><b>Energy per month.</b> {html.escape(MONTHLY_HOWTO)} "
               f'<span class="file">(plots/{MONTHLY_PLOT})</span></figcaption></figure>')
+    note += "".join(f"<p class='note'>{html.escape(line)}</p>" for line in _few_entries(r))
     return ("<h2>A year</h2>" + _facts(r) + _html_table(HEAD, _rows(r))
             + f"<p class='howto'>{html.escape(TABLE_HOWTO)}</p>" + note + figure + _checks(r))
