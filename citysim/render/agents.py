@@ -23,7 +23,7 @@ in compiled loops (``citysim.render.kernels``):
 Agents straddling the camera's near plane are clipped part by part (rare).
 
 Conventions: canvas pixels of ``citysim.render.canvas``; world frame of
-DESIGN.md; ``heading_rad`` CCW from +x; radiance in linear full-scale units.
+docs/design/architecture.md; ``heading_rad`` CCW from +x; radiance in linear full-scale units.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ surface at distance ``r_m`` from the lens:
   horizontal: ``E = level * I(theta) * cos_surface / d**2``.
 * ``E_night``: sky glow, so unlit surfaces are not pitch black.
 
-Conventions: world frame of DESIGN.md (m), unit normals, distances in metres.
+Conventions: world frame of docs/design/architecture.md (m), unit normals, distances in metres.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ where it lights the ground visibly and weighted by each pixel's ground
 reflectance.
 
 Conventions: canvas pixels (``citysim.render.canvas``), world frame of
-DESIGN.md (m), radiance in linear full-scale units.
+docs/design/architecture.md (m), radiance in linear full-scale units.
 """
 
 from __future__ import annotations

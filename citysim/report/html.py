@@ -87,7 +87,7 @@ def _figure(path: Path, kind: str, names: dict[str, str] | None = None) -> str:
     """The PNG embedded, with its caption: a short title, how to read it, and its file name."""
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     title, sentence = caption_for(path.name, kind, names)
-    # alt is the file name (tests/citysim/test_sweep.py finds the images by it); the caption says the rest
+    # alt is the file name (tests/citysim/sweep/test_sweep.py finds the images by it); the caption says the rest
     return (f'<figure id="fig-{html.escape(path.stem)}"><img alt="{html.escape(path.name)}" '
             f'src="data:image/png;base64,{data}">'
             f"<figcaption><b>{html.escape(title)}.</b> {html.escape(sentence)} "
@@ -171,8 +171,8 @@ def _run_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Path
 
 def best_settings(rows: list[dict[str, str]], axes: list[str]) -> list[dict]:
     """Per controller: the setting (axis values, seeds averaged) with the highest savings among
-    those with no never-full crossing (a zone entry whose lamp never reached full level) in any seed (or, if none has 0, the fewest in the worst seed),
-    and the one with the lowest mean lag p95."""
+    those with no never-full crossing (a zone entry whose lamp never reached full level) in any
+    seed (or, if none has 0, the fewest in the worst seed), and the one with the lowest mean lag p95."""
     cells: dict[tuple, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     for r in rows:
         if r.get("status") != "ok" or r["controller"] == REFERENCE:

@@ -26,7 +26,7 @@ sines of heading differences, velocities along the legs, a power, the swerve's a
 exact overlap check are computed here with numpy, between the compiled passes, as before they
 were compiled, so the trajectories are the same bit for bit on any machine.
 
-Conventions: world frame of DESIGN.md; offsets are metres to the left of the
+Conventions: world frame of docs/design/architecture.md; offsets are metres to the left of the
 leg direction (``citysim.world.geometry``); speeds m/s; angles rad CCW from +x.
 """
 
