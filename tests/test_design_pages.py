@@ -49,3 +49,34 @@ def test_a_module_with_a_design_page_keeps_its_docstring_short():
 def test_the_page_pattern_finds_a_page_name():
     # the checks above rest on the pattern: it must find a page in a docstring's last line
     assert PAGE.findall("Design: docs/design/steep-cameras.md (Jumps)") == ["docs/design/steep-cameras.md"]
+
+
+def _entry_points():
+    from citysim.render.camera import CameraRenderer
+    from citysim.sim.compare import run_comparison
+    from citysim.sim.loop import ControllerRun
+    from citysim.year.run import run_year
+    from detector.detector import Detector
+
+    # (what the docstring documents, the callable whose parameters it must name, needs a Returns section)
+    return [(ControllerRun, ControllerRun.__init__, False), (ControllerRun.summary, ControllerRun.summary, True),
+            (run_comparison, run_comparison, True), (Detector, Detector.__init__, False),
+            (Detector.process, Detector.process, True), (CameraRenderer, CameraRenderer.__init__, False),
+            (CameraRenderer.render, CameraRenderer.render, True), (run_year, run_year, True)]  # fmt: skip
+
+
+def test_the_python_entry_points_document_every_parameter_numpydoc_style():
+    import inspect
+
+    missing = {}
+    for documented, signed, returns in _entry_points():
+        doc = inspect.getdoc(documented) or ""
+        names = [p for p in inspect.signature(signed).parameters if p != "self"]
+        lacking = [n for n in names if not re.search(rf"^\s*(\w+, )*{n}(, \w+)* :", doc, re.MULTILINE)]
+        if names and "Parameters\n----------" not in doc:
+            lacking.append("Parameters section")
+        if returns and "Returns\n-------" not in doc:
+            lacking.append("Returns section")
+        if lacking:
+            missing[documented.__qualname__] = lacking
+    assert missing == {}
