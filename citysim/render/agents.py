@@ -1,29 +1,14 @@
 """Moving agents on the canvas: articulated shapes, IR shading, motion blur, occlusion.
 
-Each ``AgentState`` becomes the detector's own 3D model (``citysim.render.models``,
-the shapes the classifier is trained on). Python call overhead, not pixels,
-is what agents cost, so everything is done for all agents of a frame at once,
-in compiled loops (``citysim.render.kernels``):
-
-1. one call poses every model's parts in the camera frame (heading, then the
-   camera's rotation), projects their vertices, picks each part's outline -
-   its image's convex polygon - from the model's cached table by which faces
-   look at the camera (``citysim.render.outline``, no hull per part and
-   frame), shades each part (emitter light falling with the square of the
-   distance, daylight, the lamps' light at the part; ``citysim.render.light``)
-   and gives each agent's distance, image motion over the exposure and box;
-2. agents are filled far to near into one buffer of part *ranks* (pixels
-   whose centres lie inside a part, far parts first, one rank per part, 255
-   parts per batch), so nearer parts win each pixel; each agent's silhouette
-   is counted as it is drawn, before nearer ones cover it;
-3. agents close together with alike image motion form a cluster, which is
-   cut where standing surfaces are nearer, smeared, composited and labelled
-   for the ground truth in one go (``citysim.render.clusters``).
-
-Agents straddling the camera's near plane are clipped part by part (rare).
+Each ``AgentState`` becomes the detector's own 3D model (``citysim.render.models``); every agent
+of a frame is posed, projected, shaded, filled far to near and clustered at once, in compiled
+loops (``citysim.render.kernels``). Agents straddling the camera's near plane are clipped part
+by part (rare).
 
 Conventions: canvas pixels of ``citysim.render.canvas``; world frame of
 docs/design/architecture.md; ``heading_rad`` CCW from +x; radiance in linear full-scale units.
+
+Design: docs/design/modules.md (Camera frames)
 """
 
 from __future__ import annotations

@@ -22,7 +22,39 @@ from detector.outdir import staged_output
 def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, workers: int = 1,
              fidelity: str = "full", check_nights: int = 0, progress: bool = True,
              scenario_file: str | None = None) -> dict:
-    """Build the table, sum the year, run the check nights; write out_dir/year.json; return its dict."""
+    """Build the table, sum the year, run the check nights; write out_dir/year.json; return its dict.
+
+    Parameters
+    ----------
+    plan : citysim.year.plan.YearPlan
+        The checked scenario and year settings, the year's dark hours and their traffic levels.
+    out_dir : pathlib.Path
+        Folder for year.json (staged: an interrupted run leaves nothing half-written).
+    names : list of str, optional
+        Controller names; None: the scenario's list (always_on and the oracle are added).
+    workers : int
+        Processes for the table's runs.
+    fidelity : {"full", "fast"}
+        How camera controllers are judged in the table's runs.
+    check_nights : int
+        Whole nights also simulated at full fidelity and set beside the table's estimate.
+    progress : bool
+        Show progress bars (simulated seconds, rate, time left).
+    scenario_file : str, optional
+        The scenario's file name, recorded in year.json.
+
+    Returns
+    -------
+    dict
+        year.json: the site, year, tariff and grid factor, dark hours, and per controller the
+        energy (kWh per year and per month), cost, CO2 (kg), AECI (Wh/m2), savings against
+        always-on and lit-on-entry rate (shares 0..1) with its 95 % interval, and dark seconds
+        per year (s).
+
+    Notes
+    -----
+    Design: docs/design/year-response-table.md.
+    """
     table = build_table(plan.scenario, plan.year, plan.dark_hours, names, workers=workers, fidelity=fidelity,
                         progress=progress)  # fmt: skip
     figures = annual_figures(table, plan.pieces, plan.scenario, plan.year)
