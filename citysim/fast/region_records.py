@@ -12,7 +12,7 @@ Why not the detector's busy calibration nights: measured on suburban_night (1,20
 samples from those nights (three times the traffic, lamps switched by ``detector_confirmed``)
 made fast ``threshold_05`` save 0.9 % at 22:00 and 4.1 % at 02:00 where full fidelity saved
 16.1 % and 24.3 %: more people in view make more regions under every condition, and a baseline
-that lights on small regions feels every one of them (README, "Fast mode").
+that lights on small regions feels every one of them (docs/design/fast-mode-sensor-model.md).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ every controller replays it instead of stepping its own pymunk world: the same
 agents bit for bit, the world's cost paid once. The run folder is staged and
 moved into place only when every controller finished:
 
-    DIR/summary.json   figures per controller (see README)
+    DIR/summary.json   figures per controller (``ControllerRun.summary``)
     DIR/objects.csv    one row per object and lamp zone it crossed
     DIR/lamps.csv      level and power of every lamp, every simulated second
 """
