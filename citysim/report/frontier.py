@@ -16,7 +16,8 @@ from citysim.sim.compare import REFERENCE_CONTROLLERS
 
 #: The sentence a planner reads beside the plot.
 HOW_TO_READ = (
-    "Each point is a controller: further right, fewer people walk or drive into a dim zone; "
+    "Each point is a controller: further right, fewer people walk or drive into a zone whose lamp is "
+    "below full level (dimmed counts, though not off); "
     "higher, more energy saved against always-on lamps. The best controllers sit near the "
     "oracle (perfect knowledge of where everyone is), top right; a point low or to the left "
     "buys its savings with darkness or its light with energy. The bar through a point spans the "

@@ -27,7 +27,7 @@ HOW_TO_READ = (
     "point at one lamp is where a controller's gap to the bound comes from: an end lamp kept at "
     "full because no camera watches the street before it, or a lamp lit for people who went "
     "elsewhere; a point below zero is a lamp dimmer than the oracle's, where someone may have "
-    "walked into the dark."
+    "walked into a zone below full level (dimmed, not necessarily off)."
 )
 
 

@@ -25,7 +25,7 @@ MONTHLY_PLOT = "monthly_energy.png"
 MONTHLY_HOWTO = (
     "Energy each controller uses in each month, kWh: one line per controller. Months with long nights "
     "sit high; the gap between always_on and a controller is its saving that month, and the oracle's "
-    "line is the lowest any controller can go without leaving someone in the dark."
+    "line is the lowest any controller can go without leaving someone below full level."
 )
 TABLE_HOWTO = (
     "Per controller over the whole year: energy, its saving against always-on, cost at the scenario's "

@@ -3,6 +3,8 @@ controller, and how many entries a year's lit-on-entry rate rests on."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from citysim.report.table import comparison_table
@@ -98,3 +100,17 @@ def test_a_rate_on_too_few_entries_is_flagged_with_the_rule(interval, entries_pe
     assert pir_row.rstrip().split("entries")[1].startswith("*") is few
     # the references light every entry by definition: never flagged for their count
     assert not too_few("always_on", result["controllers"]["always_on"], 1)
+
+
+def test_every_caption_that_speaks_of_darkness_says_below_full():
+    from citysim.report.captions import CAPTIONS
+    from citysim.report.frontier import HOW_TO_READ
+    from citysim.report.html import RUN_COLUMNS_HOWTO
+    from citysim.report.oracle_gap import HOW_TO_READ as GAP_HOW_TO_READ
+    from citysim.report.year_section import MONTHLY_HOWTO, TABLE_HOWTO
+
+    texts = [text for _, text in CAPTIONS.values()]
+    texts += [HOW_TO_READ, GAP_HOW_TO_READ, RUN_COLUMNS_HOWTO, MONTHLY_HOWTO, TABLE_HOWTO]
+    vague = [t[:60] for t in texts if re.search(r"\bin(to)? the dark\b|\bdim zone|\bunlit\b", t)]
+    assert vague == []
+    assert all("below full" in t for t in (HOW_TO_READ, RUN_COLUMNS_HOWTO, TABLE_HOWTO))
