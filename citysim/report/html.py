@@ -118,7 +118,7 @@ def _run_rows(figures: dict) -> list[list[str]]:
 def _verdict(figures: dict, facts) -> str:
     """The installable controller saving most among those lighting enough entries on entry
     (``wording.best_installable``): never always_on or the oracle, and saving nothing is no win."""
-    caveat = f" It rests on only {facts.objects} objects: see the warning above." if facts.few_objects else ""
+    caveat = f" These figures rest on only {facts.objects} objects: see the warning above." if facts.few_objects else ""
     return f"<p>{html.escape(best_installable_sentence(figures) + caveat)}</p>"
 
 

@@ -17,6 +17,7 @@ __all__ = [
     "best_installable",
     "best_installable_sentence",
     "over_oracle_note",
+    "oracle_saves_nothing",
 ]
 
 #: What "dark" means in every darkness figure of a report.
@@ -66,7 +67,7 @@ def best_installable_sentence(controllers: Mapping[str, Mapping], lit_share: flo
             "of zone entries on entry")
     name = best_installable(controllers, lit_share)
     if name is None:
-        return f"No controller saves energy among {rule}."
+        return f"None of {rule} saves energy."
     f = controllers[name]
     return (f"Best controller: {name}, saving {100 * f['savings_vs_always_on']:.1f} % against always-on with "
             f"{100 * f['lit_on_entry_rate']:.1f} % of zone entries lit on entry; the most saving of {rule}.")
@@ -96,3 +97,15 @@ def over_oracle_note(controllers: Mapping[str, Mapping]) -> str | None:
             "a sensing lamp needs for it, so a saving beyond it is bought by leaving road users below full level "
             "(see lit on entry) or, for a clock schedule, by paying no sensing power: it is not a better "
             "controller.")
+
+
+def oracle_saves_nothing(controllers: Mapping[str, Mapping]) -> str | None:
+    """The note replacing a savings-vs-oracle column whose bound saves nothing (the oracle's own
+    saving against always-on at or below zero: its sensing power outweighs its dimming, as on a
+    short or busy run), where a share of it would read as nonsense; None when the bound saves."""
+    oracle = next((f for label, f in controllers.items() if _kind(label, f) == "oracle"), None)
+    saving = None if oracle is None else oracle.get("savings_vs_always_on")
+    if saving is None or saving >= ZERO_SAVINGS:
+        return None
+    return (f"vs oracle not given: the oracle saves {100 * saving:.1f} % against always-on on this run (its "
+            "sensing power outweighs its dimming), so there is no saving to take a share of.")

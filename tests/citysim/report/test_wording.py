@@ -46,6 +46,16 @@ def test_savings_beyond_the_oracle_are_explained_only_where_they_appear():
     assert "below full level" in over_oracle_note(beyond["controllers"])
 
 
+def test_no_share_of_the_oracle_when_the_oracle_saves_nothing():
+    # a short run: the oracle's sensing outweighs its dimming, and a share of a negative bound reads as nonsense
+    text = comparison_table(run_summary(oracle=figures("oracle", -0.061, 1.0, 1.0),
+                                        pir=figures("pir", 0.171, 0.458, -2.799)))  # fmt: skip
+    rows = {line.split()[0]: line for line in text.splitlines()[3:5]}
+    assert "-279.9 %" not in rows["pir"] and "17.1 %" in rows["pir"]
+    assert "vs oracle not given: the oracle saves -6.1 % against always-on" in text
+    assert "vs oracle above 100 %" not in text
+
+
 def test_the_best_controller_is_installable_and_lights_the_stated_share():
     controllers = {
         "always_on": figures("always_on", 0.0, 1.0),
@@ -59,7 +69,7 @@ def test_the_best_controller_is_installable_and_lights_the_stated_share():
     assert sentence.startswith("Best controller: detector_located, saving 45.0 %")
     assert f"at least {100 * LIT_ENOUGH:.0f} % of zone entries" in sentence
     assert best_installable(controllers, lit_share=0.99) is None
-    assert best_installable_sentence(controllers, lit_share=0.99).startswith("No controller saves energy")
+    assert best_installable_sentence(controllers, lit_share=0.99).startswith("None of the installable controllers")
     assert sentence in comparison_table(run_summary(**controllers))
 
 
