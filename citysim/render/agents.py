@@ -77,7 +77,7 @@ class AgentLighting:
 
     @property
     def constants(self) -> np.ndarray:
-        """What ``render_kernels.pose_parts`` takes as ``light``."""
+        """What ``citysim.render.kernels.pose_parts`` takes as ``light``."""
         return np.array([self.emitter_gain, self.uniform_irradiance, light.BEAM_EXPONENT])
 
 
@@ -89,7 +89,7 @@ def part_radiance(
 ) -> np.ndarray:
     """Parts' radiance from their centres in the camera frame (N, 3; the emitter's view) and
     the world (N, 3; the lamps' view) and their reflectances (N,): the plain numpy statement
-    of what ``render_kernels.pose_parts`` computes per part (tests hold the two equal)."""
+    of what ``citysim.render.kernels.pose_parts`` computes per part (tests hold the two equal)."""
     r2 = np.einsum("ij,ij->i", cam_centres_m, cam_centres_m)
     cos_axis = np.maximum(cam_centres_m[:, 2], 0.0) / np.sqrt(np.maximum(r2, 1e-12))
     irr = lighting.emitter_gain * cos_axis**light.BEAM_EXPONENT / np.maximum(r2, 0.04)
@@ -104,7 +104,7 @@ def part_radiance(
 
 @dataclass(frozen=True)
 class PosedParts:
-    """A frame's agents posed for drawing (``render_kernels.pose_parts`` names the arrays)."""
+    """A frame's agents posed for drawing (``citysim.render.kernels.pose_parts`` names the arrays)."""
 
     starts: list[int]  # agent i's parts are [starts[i], starts[i + 1])
     owner: np.ndarray  # (P,) agent of each part
@@ -133,7 +133,7 @@ class AgentPainter:
         )
 
     def pose(self, agents: Sequence[AgentState], lighting: AgentLighting) -> PosedParts:
-        """Every part of ``agents`` posed, projected and shaded (``render_kernels.pose_parts``);
+        """Every part of ``agents`` posed, projected and shaded (``citysim.render.kernels.pose_parts``);
         parts without an outline table get their hull."""
         n = len(agents)
         models = draw_models(agents)

@@ -92,7 +92,7 @@ def lamp_light(vx, vy, vz, nx, ny, nz, upright):  # pragma: no cover - compiled
     for a small upright body (person, car), which catches light about as well from every
     side: its cosine is taken as 0.5 plus half the lamp's elevation seen from the point.
     The one statement of the lamps' light: the background (``lamp_irradiance``) and the
-    agents (``render_kernels.pose_parts``) both use it."""
+    agents (``citysim.render.kernels.pose_parts``) both use it."""
     d2 = max(vx * vx + vy * vy + vz * vz, 0.25)
     d = math.sqrt(d2)
     cos_nadir = vz / d  # angle from the lamp's downward axis
