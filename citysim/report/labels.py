@@ -14,7 +14,7 @@ from matplotlib.text import Text
 from matplotlib.transforms import Bbox
 
 #: Distances from the point tried in turn, typographic points; beyond the first a leader line is drawn.
-RINGS_PT = (5.0, 14.0, 26.0, 40.0, 56.0, 74.0)
+RINGS_PT = (7.0, 16.0, 28.0, 42.0, 58.0, 76.0)
 #: Directions tried at each distance, degrees counter-clockwise from east (east first: a label reads
 #: best to the right of its point).
 ANGLES_DEG = (30, -30, 90, -90, 150, -150, 0, 180, 60, -60, 120, -120)
