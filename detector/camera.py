@@ -4,7 +4,7 @@ One model serves both the renderer (world -> pixel, with distortion, through
 ``cv2.projectPoints``) and the detector (pixel -> ground, undistorting only the
 pixels it needs), so the two can never disagree about geometry.
 
-Conventions (see DESIGN.md):
+Conventions (the world frame of docs/design/architecture.md):
 
 * World frame: x along the street (m), y across it (m), z up (m); ground z = 0.
 * The camera stands at ``(x_m, y_m, height_m)``; ``yaw_deg`` is the heading of

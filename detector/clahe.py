@@ -1,29 +1,10 @@
 """CLAHE of a crop equal, bit for bit, to OpenCV's CLAHE of the whole frame (compiled, numba).
 
-Why: ``cv2.createCLAHE(...).apply`` equalises every pixel of the frame, though the segmenter
-needs only the crop (``detector.roi``): on the suburban lamp camera a fifth of the detector's
-frame. OpenCV's own CLAHE cannot be given less than the frame without changing values (its
-float32 interpolation weights come from the row within the image it is given), so this module
-does what ``cv2.CLAHE.apply`` does, restricted to the crop:
+``CropCLAHE`` builds the tables of the tiles the crop needs and interpolates with the full
+frame's weights; it checks itself against ``cv2.CLAHE.apply`` on probe frames when built and
+falls back to OpenCV on the whole frame if any value differs.
 
-* a look-up table per tile, from the tile's histogram clipped at
-  ``max(int(clip_limit * tile_px / 256), 1)`` and the clipped counts redistributed (a batch to
-  every bin, the residual to every ``256 // residual``-th bin from the first), scaled by
-  ``float32(255) / tile_px`` and rounded half to even; only the tiles whose tables the crop's
-  pixels interpolate between (whole tiles of the full frame's grid, as OpenCV cuts them);
-* per crop pixel, OpenCV's float32 bilinear interpolation between the four tables, with the
-  weights computed from the full frame's row and column, in the same order of operations,
-  rounded half to even.
-
-Every operation is the float32 (or integer) operation OpenCV's C++ does, in the same order, and
-the kernels are compiled without fast-math (no reassociation, no fused multiply-add), so the
-values are OpenCV's. That is checked, not assumed: ``CropCLAHE`` compares itself with
-``cv2.CLAHE.apply`` on probe frames when it is built and falls back to OpenCV on the whole frame
-if any value differs (another OpenCV build might compute differently).
-``tests/detector/test_clahe.py`` compares them on many frames and crops.
-
-Frames that are not a whole number of tiles (OpenCV pads them by reflection) are equalised by
-OpenCV on the whole frame.
+Design: docs/design/region-of-interest.md (Equalisation)
 """
 
 from __future__ import annotations

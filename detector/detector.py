@@ -1,36 +1,12 @@
 """The paper's detector end to end: one grayscale frame in, classified moving objects out.
 
-    segment (CLAHE, MOG2, morphology, contours)
-    -> features of every inner region (eqs. 1-11, one undistortion call)
-    -> division of regions merged with their light spot (section 5.2)
-    -> tracks (section 8.2, ``detector.tracks``): regions associated with the objects of
-       earlier frames on the ground, fragments of one object joined (a camera looking steeply
-       down: a car's pieces by their footprint, ``detector.tracks.footprint``; its regions where
-       nothing changed since the last frame, ghosts, on no track: ``detector.ghosts``)
-    -> one classifier evaluation for all kept regions (section 5.4)
-    -> each track's pooled class and its physical plausibility: the target decision (a camera
-       looking steeply down: by the track's footprint on the ground, ``detector.tracks.steep``)
-
-``tracking=False`` is the paper's per-frame path: every region decided on its own frame
-(``is_target``: its own P(target)), with the light box tracker of ``detector.confirm`` for ids.
-
-OpenCV's work is the floor of the frame's cost; everything above it is kept
-small. A frame holds a handful of regions, for which numpy's per-call cost
-exceeds the arithmetic, so the per-region steps run on plain Python rows (the
-camera's constants and the classifier's polynomial prepared once per
-detector); frames with many regions take the vectorised paths. Both give the
-same detections (``tests/detector/test_detector.py`` checks this against the
-straightforward array computation).
-
-The segmenter works on the band of rows where a target within range can appear
-(``detector.roi``; ``crop_to_range=False``: the whole frame). Regions touching
-the frame border, or cut by the band's edge, are not classified (their shape is
-cut) unless division cuts an object clear of the edge off them (a car whose
-headlight beam on the road reaches the frame's edge);
-neither are regions with no ground point (bottom at or above the horizon) or
-farther than ``max_distance_m`` (the paper's range is 25 m). Boxes are OpenCV
-``(x, y, w, h)`` pixels of the full, distorted frame; distances are forward
+``Detector.process``: segment (``detector.segment``), features (eqs. 1-11), division of regions
+merged with their light spot (section 5.2), tracks (``detector.tracks``), one classifier
+evaluation, and each track's target decision; ``tracking=False`` is the paper's per-frame path.
+Boxes are OpenCV ``(x, y, w, h)`` pixels of the full, distorted frame; distances are forward
 ground distances, m (see ``detector.camera``).
+
+Design: docs/design/modules.md (The detector pipeline)
 """
 
 from __future__ import annotations
@@ -121,40 +97,42 @@ def detection_from_fields(fields: dict) -> Detection:
 class Detector:
     """Per-camera detector: owns the background model and the tracker.
 
-    Feed it a camera's frames in order with ``process``; ``is_target`` says whether a frame's
-    detections call for light. Pixel boxes are OpenCV ``boundingRect`` tuples (x, y, w, h).
-
     Parameters
     ----------
-    camera : CameraModel
-        The camera's height (m), tilt (degrees below the horizon), focal length (mm), sensor (mm)
-        and image size (px): the pinhole geometry of the paper's features.
-    model : DimensionalClassifier, optional
-        The classifier (default: the shipped general model). It must know a 'noise' class.
-    params : SegmenterParams
-        CLAHE, MOG2 and opening parameters.
+    camera : detector.camera.CameraModel
+        The camera's intrinsics, height (m) and tilt (deg): what turns pixels into metres.
+    model : detector.classifier.DimensionalClassifier, optional
+        The classifier; None loads the shipped general model.
+    params : detector.segment.SegmenterParams
+        Background subtraction and morphology settings (px, frames).
     max_distance_m : float
-        The range, m: regions farther away are not targets (> 0).
+        Regions whose bottom row is farther ahead than this (m on the ground) are not reported.
     target_threshold : float
-        P(target) from which a region is a target (0-1).
-    division : DivisionParams
-        How merged regions are divided.
-    tracker : Tracker, optional
-        The per-frame path's light box tracker (with ``tracking=False``).
+        P(target) (0..1) at or above which a detection, or a track, is a target.
+    division : detector.split.DivisionParams
+        How a region holding several objects is divided.
+    tracker : detector.confirm.Tracker, optional
+        The per-frame path's light box tracker (``tracking=False``).
     crop_to_range : bool
-        Segment only the rows (and columns) of the frame where a target within ``max_distance_m``
-        can appear (``detector.roi.range_crop``, the crop in ``self.crop``); every target within
-        range is then detected as on the full frame (same box, features and class); only regions
-        reaching above the band (beyond range, or taller than any target) are dropped. False: the
-        whole frame, as the paper's implementation does. CLAHE gives the crop the whole frame's
-        values, computed on the crop (``detector.clahe``).
+        Segment only the rows (and columns) of the frame where a target within
+        ``max_distance_m`` can appear (``detector.roi.range_crop``, the crop in ``self.crop``);
+        every target within range is then detected as on the full frame (same box, features and
+        class); only regions reaching above the band (beyond range, or taller than any target)
+        are dropped. False: the whole frame, as the paper's implementation does. CLAHE gives the
+        crop the whole frame's values, computed on the crop (``detector.clahe``).
     equalise_tiles_only : bool
-        OpenCV's CLAHE on the full frame's tiles the crop needs (no faster; equalised values 1 DN
-        apart on about 0.1 % of the pixels, so now and then a box a pixel or two off).
+        OpenCV's CLAHE on the full frame's tiles the crop needs instead (equalised values 1 DN
+        apart on about 0.1 % of the pixels, so now and then a box a pixel or two off the full
+        frame's).
     tracking : bool
-        Decide per track (``detector.tracks``, the default) or per frame (False: the paper's path).
-    tracks : TrackSet, optional
-        A configured track set (default: the standard one).
+        Decide per track (``detector.tracks``, the default) or per frame (False: the paper's
+        path).
+    tracks : detector.tracks.tracker.TrackSet, optional
+        A configured ``TrackSet``; None builds the default one.
+
+    Notes
+    -----
+    Design: docs/design/tracks.md and docs/design/region-of-interest.md.
     """
 
     def __init__(
@@ -310,14 +288,20 @@ class Detector:
         return proba, proba.tolist(), (1.0 - proba[:, self._noise_col]).tolist(), proba.argmax(axis=1).tolist()
 
     def process(self, gray: np.ndarray, learning_rate: float | None = None) -> list[Detection]:
-        """Detect and classify the moving objects of one frame: a Detection per region, noise included.
+        """Detect and classify the moving objects of one frame.
 
         Parameters
         ----------
         gray : numpy.ndarray
-            The frame, uint8, shape (height_px, width_px) of the camera.
+            The frame, uint8 (H, W), the camera's full size.
         learning_rate : float, optional
-            The background model's rate for this frame (default: MOG2's automatic rate).
+            The background model's rate, 0..1 (default: MOG2's automatic rate).
+
+        Returns
+        -------
+        list of Detection
+            One per classified region (box OpenCV ``(x, y, w, h)`` px, features m and deg, track
+            and ground position m, velocity m/s: see ``Detection``).
         """
         self._check_frame(gray)
         if self._still is not None:

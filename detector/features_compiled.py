@@ -1,12 +1,11 @@
 """``RegionGeometry.rows``' plain Python compiled (numba) for a distorted lens: one call.
 
-Why: the rows are computed several times a frame (the regions, division's parts, the tracks'
-joined fragments), each call a few microseconds per region of Python plus an undistortion
-call with its array round trip (measured, three regions: 10.6 us plain, 7.5 us compiled with
-the conversions; without distortion the plain rows take 3.5 us and stay plain). This is ``RegionGeometry.rows``' loop
-operation for operation (the same float64 arithmetic, ``math.atan``/``math.tan`` from the
-same C library; no fast-math), with ``detector.undistort``'s compiled undistortion inside.
-``RegionGeometry`` uses it only where it gives the plain Python rows bit for bit on probe boxes.
+Operation for operation the plain loop (the same float64 arithmetic, ``math.atan``/``math.tan``
+from the same C library; no fast-math), with ``detector.undistort``'s compiled undistortion
+inside. ``RegionGeometry`` uses it only where it gives the plain Python rows bit for bit on probe
+boxes.
+
+Design: docs/design/modules.md (Compiled region rows)
 """
 
 from __future__ import annotations

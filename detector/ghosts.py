@@ -1,29 +1,16 @@
 """Steep cameras: a region where nothing changed since the last frame is no moving object.
 
-Background subtraction (MOG2) marks what differs from its model of the background. When an
-object that was part of that model leaves (a car parked in the first frame, which the model
-learns as background, then drives off; a car that stood a few seconds), the ground it uncovers
-differs from the model and is foreground (a "ghost") for seconds, until the model relearns it.
-A ghost does not move: its pixels are the still ground, the same from frame to frame, while a
-moving body changes the pixels along its outline every frame (the classic test: Cucchiara et
-al., "Detecting moving objects, ghosts and shadows in video streams", 2003). On the car-park
-development clip (camera looking 50 degrees down; frames 5-47, 290-390) the ghosts' foreground
-pixels changed by more than ``CHANGE_DN`` between frames in 0-2.3 % of them, the pieces of the
-moving cars and the walker in 7-98 % (but a piece on a car's windscreen that stood still in the
-image while the car moved under it: 0.4 %); a region under ``MAX_STILL_SHARE`` is still.
-
-A still region is kept and classified as any region (the paper's per-frame output is unchanged)
-but follows no track (``detector.tracks.tracker``): a ghost neither starts a track nor
-continues or joins a moving object's, so it can be no target. Gated to cameras looking steeply
-down (``detector.tracks.footprint.is_steep``), where the development footage shows ghosts
-splitting and taking over cars' tracks; the lamps' cameras and the paper's are unchanged (a
-walker who stands still under a lamp keeps his track through the tracker's still hold).
+A region whose share of changed foreground pixels is under ``MAX_STILL_SHARE`` is still (a
+"ghost" of background uncovered by an object leaving); it is classified but follows no track.
+Only for cameras looking steeply down (``detector.tracks.footprint.is_steep``).
 
 Conventions: frames are uint8 grayscale of the camera's size; boxes OpenCV ``(x, y, w, h)``
 pixels of that frame; the mask is the segmenter's final foreground mask of the frame (nonzero
 is foreground); a pixel "changed" when its gray level differs from the last frame's by more
 than ``CHANGE_DN`` (digital numbers, 0-255). A frame identical to the one before (a video's
 repeated frame) is no new frame: the comparison stays with the last frame that differed.
+
+Design: docs/design/modules.md (Ghosts)
 """
 
 from __future__ import annotations

@@ -1,68 +1,14 @@
 """Region of interest per camera: the part of the frame where a target within range can appear.
 
-The detector reports a region only if the forward ground distance of its bottom row (eqs. 2-4,
-``detector.features``) is at most ``max_distance_m``, and Table 1's targets are at most
-``TALLEST_TARGET_M`` tall. So a camera's frame has a band, fixed per camera, outside which
-nothing the detector would report can appear, and the segmenter (CLAHE, MOG2, morphology,
-contours) runs on that band alone (``Crop``, see Equalisation for CLAHE), computed once from the
-``CameraModel``.
-
-Which rows. The paper's geometry makes every pixel of one undistorted row the same forward
-distance and the same depression below the horizon, whatever its column. A target whose nearest
-ground point (feet, front wheels: the region's bottom, what eq. 4 measures) is at forward
-distance d <= max_distance_m has all its points at heights 0 .. H (H <= 2 m, Table 1's tallest)
-and forward distances d .. d + reach, where reach is the diagonal of the class's largest
-footprint (Table 1's length x width: a car seen along its length has its roof's far edge 4.9 m
-beyond its front wheels). The point of it highest in the image, i.e. of smallest depression, is
-then at most at depression atan((height_m - H) / (max_distance_m + reach)); every row below the
-undistorted row of that depression can hold part of such a target, no row above it can. Rows
-below the band are never cut: the nearest ground is always within range, and the bottom rows are
-needed to tell a region that reaches the frame's bottom edge (an object close to the camera that
-extends below the frame: at the border, not classified) from one that does not.
-
-Which columns. Forward distance does not depend on the column, so for a pinhole camera every
-column holds the band's rows; only lens distortion bends rows, and the columns are those holding
-any pixel whose undistorted row is in the band (all of them for every camera of the paper).
-
-Margins, px, above (and beside) the band: 1 for lens distortion and rounding (pixels are tested
-at their centres), then the morphology's reach, so that a target's region inside the band is
-traced on exactly the mask the full frame gives (given the same MOG2 output): the joining dilation
-grows a region by ``dilate_iterations * r`` rows (r = ``open_kernel_px // 2``), one more row must
-stay background so that nothing joins it, and the mask of a row depends on the MOG2 output up to
-``(2 + dilate_iterations) * r`` rows away (erosion, dilation, the joining dilation), which differs
-from the full frame's within that distance of the crop's edge.
-
-Equalisation. MOG2, the morphology and the contours run on the crop. OpenCV's CLAHE takes its
-float32 interpolation weights from the row within the image it is given, so only the whole frame
-gives the full frame's equalised values bit for bit. By default (``Crop.clahe_px`` the whole
-frame) the segmenter computes exactly those values on the crop alone (``detector.clahe``: the
-tables of the tiles the crop needs, the weights from full-frame rows), and then the crop's masks,
-regions and detections are the full frame's. The older approximation, ``equalise_tiles_only``,
-gives OpenCV's CLAHE the full frame's tiles the crop needs instead: CLAHE runs on the full
-frame's own tiles (``SegmenterParams.clahe_tile_px`` per side) from the tile boundary at least
-half a tile above the crop, so every crop pixel interpolates between the same tiles' tables, built
-from the same pixels, as on the full frame; but the weights, computed from the row within the
-part given, round differently, and about 0.1 % of the pixels come out 1 DN apart. MOG2 then now
-and then decides a pixel differently, and its models for that pixel part ways for a while
-(measured on ``tests/detector/test_roi.py``'s clip: one target's box of 240 two pixels wider,
-a speck beside it joined). A frame whose size is not a whole number of tiles (OpenCV pads it)
-is equalised whole either way.
-
-Regions cut by the crop. A region touching a crop edge that is not a frame edge is not "at the
-border" (``Regions.touches_border`` keeps meaning the frame's border); it is flagged
-``Regions.cut_by_crop``. The detector treats it like a border region (not classified, unless
-division cuts an object off it clear of the edge): a region reaching above the band is either
-beyond range (its bottom is) or, measured at its bottom's distance, taller than any Table 1
-target, so its cut shape would be measured as a target it is not (height capped at the band's
-top) and the whole shape is not in view to measure. Such regions are the only ones the crop can
-change: an object whose feet are within range and whose size is within Table 1 lies inside the
-band and is segmented exactly as on the full frame; ``tests/detector/test_roi.py`` checks that
-detections of targets within range are the same (box and class) on the crop and on the full
-frame.
+``Crop`` is a band of rows (and the columns holding them), computed once from the
+``CameraModel``, plus margins for distortion and the morphology's reach, so the segmenter runs
+on the band alone and a target within range is segmented exactly as on the full frame.
 
 Conventions: pixels are OpenCV's (u right, v down, pixel centres on integers, rows and columns
 of the distorted frame); a crop is the half-open rows ``top_px .. bottom_px - 1`` and columns
 ``left_px .. right_px - 1``, its equalised part ``Crop.clahe_px`` likewise.
+
+Design: docs/design/region-of-interest.md
 """
 
 from __future__ import annotations

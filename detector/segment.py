@@ -1,35 +1,16 @@
 """Moving-region segmentation: the paper's pre-processing and filtering stages (section 3).
 
-One grayscale frame in, the moving regions of that frame out:
+One grayscale frame in, the moving regions of that frame out: CLAHE, MOG2 background
+subtraction, shadow cut, opening, dilation, external contours, boxes and contour areas, size and
+extent filter; on the whole frame or on a ``detector.roi.Crop`` of it (regions touching a crop
+edge that is not a frame edge are flagged ``cut_by_crop``).
 
-    CLAHE -> MOG2 background subtraction -> shadow cut -> opening -> dilation
-    -> external contours -> bounding boxes and contour areas -> size/extent filter
+Conventions: boxes are OpenCV ``boundingRect`` tuples ``(x, y, w, h)`` in pixels of the full
+frame (pixel centres on integers, so the box covers columns x .. x + w - 1); contour areas are
+``cv2.contourArea``'s (Green's theorem over the vertices: a filled w x h rectangle has area
+(w-1)(h-1)).
 
-Conventions: boxes are OpenCV ``boundingRect`` tuples ``(x, y, w, h)`` in
-pixels of the full frame (pixel centres on integers, so the box covers columns
-x .. x + w - 1); contour areas come from Green's theorem over the contour
-vertices, exactly what ``cv2.contourArea`` returns (a filled w x h rectangle
-has area (w-1)(h-1)).
-
-A segmenter may work on a ``detector.roi.Crop`` of the frame only (the detector
-gives it the band where a target within range can appear): MOG2, the morphology
-and the contours run on the crop, and so does CLAHE (``detector.clahe``: the whole
-frame's values, from the tiles the crop needs); contours are traced with
-the crop's offset so boxes and contours are in full-frame pixels, and regions
-touching a crop edge that is not a frame edge are flagged ``cut_by_crop`` rather
-than ``touches_border``. Without a crop it works on whole frames of any size.
-
-The reference values (CLAHE clip limit 3 on an 8 x 8 tile grid, MOG2 variance
-threshold 16 with shadow detection, shadows cut at 170, a 3 x 3 elliptic
-opening, one extra dilation) are those of the paper's published implementation.
-MOG2's history is a time, so cameras of any frame rate forget alike: 500 frames
-at the 15 frames/s camera default.
-
-Savings that change no output: MOG2 writes shadows straight as the cut would
-leave them (``setShadowValue`` 0, or 255 for a cut below MOG2's shadow value
-127), so no threshold pass is needed; a frame where MOG2 finds nothing skips
-the morphology and the contours; and the equalised image and the mask are
-buffers kept across frames (``Regions.mask`` is rewritten by the next frame).
+Design: docs/design/modules.md (Segmentation)
 """
 
 from __future__ import annotations

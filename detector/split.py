@@ -2,38 +2,11 @@
 object ends and its light spot begins, read from the mask's histograms; and the thresholds
 of the whole division (``DivisionParams``).
 
-How a region is read (all in the region's own bounding box, pixels):
+Column heights separate the body from side pixels, row widths place the body's foot row, and
+``split_at_widening`` reads a compact blob on a wider flat part from the row widths alone. All
+in the region's own bounding box, pixels.
 
-* Column heights (the vertical histogram) separate the *body*, the columns at
-  least ``tall_fraction`` of the tallest column, from *side* pixels left and
-  right of them. A light spot is flat and lies on the ground, so its side
-  pixels sit in the bottom rows and are short next to the body.
-* Row widths (the horizontal histogram) then place the body's foot row: a spot
-  reaching out on both sides lies in front of the object (nearer, so lower in
-  the image) and the body ends at the last narrow row above it; a spot on one
-  side lies beside it, about as far away, so the feet are at the spot's widest
-  row (an ellipse on the ground is widest at its centre); a spot ending above
-  the body's bottom lies behind it and the feet are the bottom row.
-* A region whose top is a compact blob standing on a much wider flat part
-  (a car head-on on its own headlight beam, where the beam is both wider and,
-  near the camera, taller in pixels than the car) defeats the column test.
-  ``split_at_widening`` reads it from the row widths alone: top down, the
-  first row widening sharply past every row above it (``widen_start``), with
-  the rows below reaching ``widen_ratio`` times the blob's width and staying
-  that wide, marks the blob's base; the cut is at the narrowest row (the neck)
-  between the blob's widest row and that widening. It is tried only when the
-  column split fails or is rejected.
-
-Evidence for the thresholds: ~300 random poses each (5-22 m, any heading,
-Table 1 sizes) of the ``detector.train.shapes`` models projected with the paper's
-scene B camera, with and without an elliptic spot 1-7 m ahead of the object.
-Lone pedestrians, groups and vehicles have extents 0.5-0.8 (median 0.65),
-cyclists 0.47-0.64; an object merged with its spot 0.3-0.57 (p90). With
-``max_extent`` 0.6, 95 % of merged pedestrians, 91 % of cyclists and 71 % of
-vehicles are divided (median worst error of width/height/area against the lone
-object falls from 142 % to 7 %, 164 % to 10 %, 78 % to 14 %), while 2 % of lone
-pedestrians and groups and 10 % of lone side-view cyclists are divided too: a
-bicycle under its rider looks to the histograms like a spot under a walker.
+Design: docs/design/modules.md (Region division)
 """
 
 from __future__ import annotations

@@ -1,21 +1,10 @@
 """Commands run beside and behind the work in the foreground, their output kept until it is done.
 
-``make demo``'s night keeps both cores busy, but not all the time: for its first seconds one worker
-waits for the traffic recorder (compiling the world's kernels), and for its last seconds one worker
-has nothing left while the other finishes the camera controller. The check and the year need
-nothing of the night, so they start with it:
+``make demo`` starts the check beside its night (same priority) and the year behind it (nice 19,
+only the CPU the night leaves idle). Each command's output is kept and handed over whole once it
+has finished, so tables never interleave with the foreground's progress bar.
 
-* the year at nice 19 (POSIX ``nice``, the lowest priority): the kernel gives it only the CPU time
-  the night leaves idle (a nice-19 process gets about 1.5 % of a core when it competes with a
-  nice-0 one), so the night is not slowed;
-* the check at the night's own priority: its ~40 CPU-s are one serial chain (the world's and then
-  the renderer's and detector's kernels compiled, one worker rendering), which behind the night
-  only ran once the night was done, alone on one core. Beside it, it shares both cores from the
-  start: measured on a fresh clone's demo, the check beside and the year behind ended 122 and
-  134 s after the start, both behind 152 and 154 s.
-
-Each command's output is kept and handed over whole once it has finished, so tables never
-interleave with the foreground's progress bar.
+Design: docs/design/modules.md (Work beside the demo's night)
 """
 
 from __future__ import annotations

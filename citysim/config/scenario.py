@@ -4,8 +4,8 @@
 or raises ``ScenarioError`` whose one message starts with the file and the
 dotted path of each bad field (``lamps.camera.tilt_deg: ...``) and says what is
 valid. Every section is a frozen pydantic model that forbids unknown keys; the
-street, lamp and traffic sections live in ``config_street`` and
-``config_traffic``. Past the loader, code passes these typed objects, never
+street, lamp and traffic sections live in ``citysim.config.street`` and
+``citysim.config.traffic``. Past the loader, code passes these typed objects, never
 dicts. ``override(scenario, {"lamps.camera.tilt_deg": 20})`` makes a validated
 variant (parameter sweeps).
 

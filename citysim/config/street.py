@@ -1,6 +1,6 @@
 """Scenario schema for the static street and the lamp chain (with the lamps' camera).
 
-Conventions: world frame of DESIGN.md (x along the street from 0 to
+Conventions: world frame of docs/design/architecture.md (x along the street from 0 to
 ``length_m``, y across it, z up, metres). Lanes and sidewalks are given by the
 y of their centre line and their width.
 """

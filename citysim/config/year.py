@@ -7,7 +7,7 @@ the scenario's own hourly rates (its ``hourly_profile`` from ``start_hour`` on, 
 ``evening_profile`` below for the hours before ``start_hour``) times the weekday factor of
 that hour's date times its month's factor, unless an hourly counts file says otherwise.
 The table settings (traffic levels, sample and warm-up lengths) trade run time against
-how steady the annual figures are; the defaults are measured (see docs/guide/year.md and docs/design/performance.md).
+how steady the annual figures are; the defaults are measured (docs/design/year-response-table.md).
 """
 
 from __future__ import annotations

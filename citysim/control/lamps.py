@@ -1,30 +1,15 @@
 """Luminaire power model: light level ramps and exact energy integration.
 
-A lamp's visible light is a *level* in 0..1 (0 off, ``dim_level`` idle, 1
-full). A controller sets a target level; the level then moves toward it in a
-straight line, up at ``1 / ramp_up_s`` per second and down at ``1 / fade_s``
-per second (DALI fades run from 0.1 s to minutes; the paper's lamps switch up
-in 0.3 s). A zero ramp or fade time is an instant step.
-
-Power (W) at level L::
-
-    power_w = rated_power_w * L                # LED drivers are close to linear
-            + standby_power_w   (if the lamp has a controllable driver, see Lamp)
-            + sensing_power_w   (if the lamp senses: camera, board, IR emitter)
-
-Energy is integrated in closed form: between two target changes the level is
-one linear ramp then a flat stretch, whose integrals are exact, so energy does
-not depend on how often ``advance`` is called. A plain always-on lamp (level 1,
-no sensing, no controllable driver) uses exactly ``rated_power_w * duration_s``.
-
-The spec is the scenario's ``lamps.luminaire`` (``citysim.config.street.LuminaireSpec``),
-validated there once. Hold times are the controller's business, not the lamp's: ``hold_s``
-is carried in the spec so every controller reads the same number, but a lamp never drops
-its level by itself. The controller calls ``set_target(t, dim_level)`` once the
-hold since its last detection has expired.
+A lamp's light is a level in 0..1 (0 off, ``dim_level`` idle, 1 full) that ramps linearly to
+the controller's target; power (W) is ``rated_power_w * level`` plus standby and sensing power;
+energy (J) is integrated in closed form. The spec is the scenario's ``lamps.luminaire``
+(``citysim.config.street.LuminaireSpec``); the controller calls ``set_target(t, dim_level)``
+once its hold has expired: a lamp never drops its level by itself.
 
 Time: every method takes simulation seconds ``t_s``; a lamp's clock only moves
 forward (``advance``/``set_target`` with an earlier time raise ``ValueError``).
+
+Design: docs/design/modules.md (Luminaire power)
 """
 
 from __future__ import annotations

@@ -1,36 +1,12 @@
 """Light where people are going: every confirmed target is placed on the street map.
 
-A lamp camera sees 6-25 m ahead, which is mostly the next lamp's zone, so lighting only the
-camera's own lamp lights the wrong stretch. ``DetectorLocated`` takes each confirmed track of
-the detector (seen in n frames, a target in k of its last n, no physics rule against it:
-``citysim.control.track_windows``, as ``detector_confirmed``; its class the track's once the
-track is a target, the frame's before), takes its ground position and velocity from the detector's track
-(``detector.tracks``: the bottom-centre pixel through the camera model, world x along the
-street, y across, m; velocity over the track's last half second; detections without a track
-are placed with ``pixel_to_ground`` and their velocity fitted over the last second here), and
-lights:
+``DetectorLocated`` places each confirmed track of the detector on the street (world x along
+the street, y across, m; velocity m/s) and lights the lamp whose zone it stands in and every
+lamp whose zone it will enter within its lead time: its own pole's lamp directly, the others
+over the simulated network. Lost tracks are extrapolated per class; an end lamp whose approach
+no camera watches is kept at full (``light_blind_ends``).
 
-* the lamp whose zone it stands in, and
-* every lamp whose zone it will enter within its lead time: the lamp's ramp, the radio's
-  latency and jitter, one camera frame and a class margin (a vehicle at 60 km/h needs several
-  zones ahead lit before it arrives).
-
-The camera's own lamp (the pole it hangs on: with two cameras per pole, ``Street.cameras``, each
-camera's tracks are placed with that camera's pose and lit from its pole) is switched directly;
-others are told over the simulated network (its latency, jitter and loss apply), a message
-repeated every ``network.repeat_s`` while the need lasts. Each lamp is released once nothing
-located is in or heading into its zone, plus the hold time. A track lost from view (it left the
-camera's 25 m, or walks under the pole where no camera looks) is extrapolated at its last
-velocity for a bounded distance and time per class (cars and bicycles, which keep their lane
-and which the detector loses often, much further than walkers), so the zones it goes into are
-lit before another camera picks it up. A car or bicycle whose velocity is not yet measured is
-taken to go its lane's way at a brisk speed (``LANE_PRIOR_MPS``). An end lamp whose approach
-no camera watches (``world.coverage.approaches_seen``: suburban_night's first, whose camera
-looks away from the street's start) is kept at full: whoever comes from there is seen by no
-camera before entering its zone (``light_blind_ends`` false turns this off). A track whose ground speed is
-beyond any road user's (an insect near the lens seen as far away and fast) is not a target:
-the detector's tracks already reject those (``detector.tracks.plausibility``); the check here
-stays for detections without a track.
+Design: docs/design/modules.md (Lighting where people are going)
 """
 
 from __future__ import annotations

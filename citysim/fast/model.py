@@ -1,39 +1,11 @@
 """The sensor model: what the real detector reports about the agents a camera may see.
 
-Fitted by ``fit_sensor_model`` from calibration records (``citysim.fast.records``: every judged
-frame of full-fidelity render-and-detect, with the candidates of ``citysim.fast.geometry`` and
-whether the detector found each), it holds:
+``fit_sensor_model`` fits it from calibration records (``citysim.fast.records``): hit
+probabilities per candidate cell, their persistence, the class reported, false alarms, the
+same on track and plausible-frame decisions, idle regions and the threshold baselines'
+region sizes. Saved as JSON.
 
-* ``p_hit``: P(a candidate is detected as a target in a judged frame | kind, forward distance,
-  bearing, light level at the agent, young background, speed), binned. Sparse cells are shrunk
-  toward their coarser parent (kind x distance x bearing x light, then kind x distance, then
-  kind), each with ``PRIOR_FRAMES`` pseudo-frames, so a cell seen twice is not taken at its word.
-* ``persistence``: per kind, the lag-1 correlation of one candidate's hits in consecutive frames
-  (misses come in streaks); fast mode draws hits from a two-state chain with the cell's P and it.
-* ``class_given_hit``: the detector class a detected kind is reported as (lamps ahead depend on it).
-* false alarms (insects, rain, branches): per judged frame with none running, the probability
-  one starts (``fa_start_p``, by the camera's own lamp lit or dim), how many judged frames it
-  lasts, and where it is reported (distance, box, class), as samples.
-* ``track``: the same hit, persistence, class and false-alarm tables fitted on the detector's
-  track decisions (a detection is a target when its track is: ``detector_tracked``, and fast
-  mode's ``detector_located``) rather than each frame's own (``detector``; any controller with
-  ``tracking: false``). Insects seldom make a plausible target track: false-alarm rates differ.
-* ``plausible``: the same again on the frames ``detector_confirmed`` and ``detector_network``
-  count per track: a frame's own target decision while no physics rule rules its track out, from
-  the track's n-th sighting on (``citysim.control.track_windows``; the wait is in the tables, so
-  fast mode's windows do not wait again). ``for_decisions()`` gives the model a controller draws.
-* ``p_regions_idle``: P(a frame with no candidate holds some moving region) (keeps the camera
-  judged every frame, as in full fidelity).
-* the threshold baselines' trigger: samples of the largest foreground region's share of the
-  frame, per condition (``threshold_conditions``: nothing in view, or the nearest candidate's kind
-  and distance bin, or with no candidate the nearest beam of a road user out of view; the
-  camera's own lamp lit or dim; the background's age), and ``area_persistence``: how long a big
-  region lasts (consecutive frames are nearly the same picture: a share over 5 % is still over 5 %
-  in the next frame 96 % of the time). Fast mode keeps a frame's rank in its condition's samples
-  with that probability, so big regions come in episodes, not as independent frames. Fitted on
-  calibration's region nights: each baseline switching its own lamps at the scenario's own
-  traffic (``citysim.fast.region_records``), not on the detector's busier nights.
-Saved as JSON (small tables and capped sample lists).
+Design: docs/design/fast-mode-sensor-model.md
 """
 
 from __future__ import annotations

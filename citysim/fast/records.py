@@ -66,7 +66,7 @@ def is_young(learning_rate: float | None) -> bool:
 
 
 class RecordingDetector:
-    """A real ``detector.Detector`` that keeps what it saw, plus a whole-frame threshold segmenter."""
+    """A real ``detector.detector.Detector`` that keeps what it saw, plus a whole-frame threshold segmenter."""
 
     def __init__(self, detector, threshold_segmenter):
         self.inner = detector
@@ -324,7 +324,7 @@ def _along_heading(agent: AgentState, ground_m) -> tuple[float, float]:
 
 
 def _track_target(detection, threshold: float) -> bool:
-    """Whether a detection is a target by its track (``detector.Detector.is_target`` with tracks):
+    """Whether a detection is a target by its track (``detector.detector.Detector.is_target`` with tracks):
     its track's decision, or its own P(target) where it carries no track."""
     if detection.track_p_target is not None:
         return bool(detection.track_target)

@@ -1,18 +1,14 @@
 """Calibration records of the threshold baselines: the largest foreground region of every judged frame.
 
 The paper's naive baselines (``citysim.control.camera.ForegroundThreshold``) light a lamp when a
-foreground region covers a share of the frame. Fast mode draws that region's share from samples
-recorded under the same condition (``citysim.fast.model.threshold_conditions``). Those samples
-come from *region nights*: ordinary full-fidelity runs of a threshold baseline itself, at the
-scenario's own traffic, whose segmenters are wrapped by ``RegionSensors`` so ``RegionRecorder``
-can write one row per judged frame (the columns ``citysim.fast.model.fit_area_fractions`` and
-``fit_area_persistence`` read).
+foreground region covers a share of the frame; fast mode draws that share from samples recorded
+under the same condition (``citysim.fast.model.threshold_conditions``). The samples come from
+*region nights*: full-fidelity runs of a threshold baseline itself, at the scenario's own
+traffic, whose segmenters ``RegionSensors`` wraps so ``RegionRecorder`` writes one row per judged
+frame (the columns ``citysim.fast.model.fit_area_fractions`` and ``fit_area_persistence`` read),
+not the detector's busier calibration nights.
 
-Why not the detector's busy calibration nights: measured on suburban_night (1,200 s, seed 1),
-samples from those nights (three times the traffic, lamps switched by ``detector_confirmed``)
-made fast ``threshold_05`` save 0.9 % at 22:00 and 4.1 % at 02:00 where full fidelity saved
-16.1 % and 24.3 %: more people in view make more regions under every condition, and a baseline
-that lights on small regions feels every one of them (docs/design/validation.md).
+Design: docs/design/fast-mode-sensor-model.md
 """
 
 from __future__ import annotations

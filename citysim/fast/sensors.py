@@ -1,7 +1,7 @@
 """Fast mode's stand-ins for the detector and the threshold segmenter: no pixels, calibrated draws.
 
 ``FastSensors`` is a ``ControlContext.sensors``: camera controllers build their per-camera
-``SensedDetector`` (the ``detector.Detector`` interface they use: ``process``, ``is_target``,
+``SensedDetector`` (the ``detector.detector.Detector`` interface they use: ``process``, ``is_target``,
 ``last_regions``, ``reset_background``, ``segmenter.automatic_learning_rate``, ``camera``,
 ``tracker.is_confirmed``, ``target_threshold``) or ``SensedSegmenter`` (the threshold baselines'
 ``apply`` / ``reset``) through it. The sense process (``citysim.fast.sense``) tells it the

@@ -1,29 +1,14 @@
 """Moving agents on the canvas: articulated shapes, IR shading, motion blur, occlusion.
 
-Each ``AgentState`` becomes the detector's own 3D model (``citysim.render.models``,
-the shapes the classifier is trained on). Python call overhead, not pixels,
-is what agents cost, so everything is done for all agents of a frame at once,
-in compiled loops (``citysim.render.kernels``):
-
-1. one call poses every model's parts in the camera frame (heading, then the
-   camera's rotation), projects their vertices, picks each part's outline -
-   its image's convex polygon - from the model's cached table by which faces
-   look at the camera (``citysim.render.outline``, no hull per part and
-   frame), shades each part (emitter light falling with the square of the
-   distance, daylight, the lamps' light at the part; ``citysim.render.light``)
-   and gives each agent's distance, image motion over the exposure and box;
-2. agents are filled far to near into one buffer of part *ranks* (pixels
-   whose centres lie inside a part, far parts first, one rank per part, 255
-   parts per batch), so nearer parts win each pixel; each agent's silhouette
-   is counted as it is drawn, before nearer ones cover it;
-3. agents close together with alike image motion form a cluster, which is
-   cut where standing surfaces are nearer, smeared, composited and labelled
-   for the ground truth in one go (``citysim.render.clusters``).
-
-Agents straddling the camera's near plane are clipped part by part (rare).
+Each ``AgentState`` becomes the detector's own 3D model (``citysim.render.models``); every agent
+of a frame is posed, projected, shaded, filled far to near and clustered at once, in compiled
+loops (``citysim.render.kernels``). Agents straddling the camera's near plane are clipped part
+by part (rare).
 
 Conventions: canvas pixels of ``citysim.render.canvas``; world frame of
-DESIGN.md; ``heading_rad`` CCW from +x; radiance in linear full-scale units.
+docs/design/architecture.md; ``heading_rad`` CCW from +x; radiance in linear full-scale units.
+
+Design: docs/design/modules.md (Camera frames)
 """
 
 from __future__ import annotations
@@ -92,7 +77,7 @@ class AgentLighting:
 
     @property
     def constants(self) -> np.ndarray:
-        """What ``render_kernels.pose_parts`` takes as ``light``."""
+        """What ``citysim.render.kernels.pose_parts`` takes as ``light``."""
         return np.array([self.emitter_gain, self.uniform_irradiance, light.BEAM_EXPONENT])
 
 
@@ -104,7 +89,7 @@ def part_radiance(
 ) -> np.ndarray:
     """Parts' radiance from their centres in the camera frame (N, 3; the emitter's view) and
     the world (N, 3; the lamps' view) and their reflectances (N,): the plain numpy statement
-    of what ``render_kernels.pose_parts`` computes per part (tests hold the two equal)."""
+    of what ``citysim.render.kernels.pose_parts`` computes per part (tests hold the two equal)."""
     r2 = np.einsum("ij,ij->i", cam_centres_m, cam_centres_m)
     cos_axis = np.maximum(cam_centres_m[:, 2], 0.0) / np.sqrt(np.maximum(r2, 1e-12))
     irr = lighting.emitter_gain * cos_axis**light.BEAM_EXPONENT / np.maximum(r2, 0.04)
@@ -119,7 +104,7 @@ def part_radiance(
 
 @dataclass(frozen=True)
 class PosedParts:
-    """A frame's agents posed for drawing (``render_kernels.pose_parts`` names the arrays)."""
+    """A frame's agents posed for drawing (``citysim.render.kernels.pose_parts`` names the arrays)."""
 
     starts: list[int]  # agent i's parts are [starts[i], starts[i + 1])
     owner: np.ndarray  # (P,) agent of each part
@@ -148,7 +133,7 @@ class AgentPainter:
         )
 
     def pose(self, agents: Sequence[AgentState], lighting: AgentLighting) -> PosedParts:
-        """Every part of ``agents`` posed, projected and shaded (``render_kernels.pose_parts``);
+        """Every part of ``agents`` posed, projected and shaded (``citysim.render.kernels.pose_parts``);
         parts without an outline table get their hull."""
         n = len(agents)
         models = draw_models(agents)

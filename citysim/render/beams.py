@@ -12,7 +12,7 @@
   ground below the light down to the image of its mirror point under the road.
 
 An agent's beam is its kind's (``beam_of``). Conventions: canvas
-pixels (``citysim.render.canvas``), world frame of DESIGN.md, radiance in
+pixels (``citysim.render.canvas``), world frame of docs/design/architecture.md, radiance in
 linear full-scale units; lamp offsets are (forward, left, up) m in the agent's
 frame.
 """

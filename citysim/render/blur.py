@@ -6,7 +6,7 @@ therefore the average of the layer over its positions from now (offset 0)
 back to ``(du, dv)`` px ago - a line kernel (``cv2.filter2D``).
 
 Agents near each other whose image motions are nearly equal (within 1 px or
-15 %, ``render_kernels.group_boxes``) share one smear, by their mean motion: the
+15 %, ``citysim.render.kernels.group_boxes``) share one smear, by their mean motion: the
 difference is below what a frame can show.
 
 Conventions: canvas pixels of ``citysim.render.canvas``; ``(du, dv)`` is the

@@ -4,33 +4,12 @@
 returns an 8-bit grayscale frame as the lamp's camera would see it and, for
 every agent whose silhouette shows in the frame, its class and bounding box.
 
-A frame is built on the camera's undistorted canvas (``render_canvas``), in
-linear radiance (``render_light``):
+Ground truth: boxes are OpenCV ``boundingRect`` boxes (x, y, w, h) of the agent's visible
+rendered pixels in the output frame, clipped to the frame; ``distance_m`` is the forward ground
+distance of the footprint centre along the camera heading (m, what ``detector.features``
+estimates, eq. 4).
 
-1. the cached static background re-lit by the lamps that are on, swaying
-   crowns composited (``render_background``);
-2. headlight and flashlight spots on the ground (``render_spots``);
-3. agents far to near, motion-blurred, hidden behind nearer standing things
-   (``render_agents``, ``render_clusters``);
-4. glare blobs of carried lights and lamp heads (``render.beams``), then the camera effects
-   of ``render.effects`` (rain, insects);
-5. camera response to 8 bits, lens distortion by one remap, then the effects' frame filters
-   (sensor noise).
-
-Rendering a frame must cost less than detecting it. Step 5 is cached for the
-still view and redone only in the canvas boxes steps 1-4 drew on
-(``render_output``); the agents of a frame are posed, projected and shaded
-together, and drawn in clusters that share one smear; the per-pixel loops
-of agents, spots and truth are compiled (``render_kernels``), one call per
-frame or cluster rather than several OpenCV calls per agent.
-
-Ground truth: boxes are OpenCV ``boundingRect`` boxes (x, y, w, h) of the
-agent's *visible* rendered pixels in the output frame (with blur, the pixels
-the smeared agent covers more than half; with distortion, the frame pixels
-whose nearest canvas pixel shows it), clipped to the frame.
-``distance_m`` is the forward ground distance of the footprint centre along
-the camera heading, the quantity ``detector.features`` estimates (eq. 4).
-Agents entirely hidden or out of view are not reported.
+Design: docs/design/modules.md (Camera frames)
 """
 
 from __future__ import annotations
@@ -110,24 +89,21 @@ class RenderedFrame:
 
 
 class CameraRenderer:
-    """Renders one camera's frames; the static scene is prepared once here.
-
-    World convention: x along the street, y across it, z up, metres; the camera's pose and
-    intrinsics come from its ``CameraModel`` (``tilt_deg`` is the depression below the horizon).
+    """Renders one camera's near-infrared frames; the static scene is prepared once here.
 
     Parameters
     ----------
-    camera : CameraModel
-        The camera: position (m), heading and tilt (degrees), focal length (mm), sensor (mm), image
-        size (px) and distortion.
-    street : Street
-        The street geometry, its lamps and scenery.
-    environment : EnvironmentSpec
-        Light, weather, wind, insects, sensor noise and exposure.
+    camera : detector.camera.CameraModel
+        Intrinsics, position (m, the world frame of docs/design/architecture.md), height (m),
+        heading and tilt (deg) of the camera.
+    street : citysim.world.street.Street
+        Lanes, sidewalks, lamps and scenery, m.
+    environment : citysim.config.scenario.EnvironmentSpec
+        The night: ambient light, weather, wind (m/s), exposure (ms), lens distortion, insects.
     rng : numpy.random.Generator
-        The renderer's random stream (scenery sway, noise, rain, effects), drawn in call order.
+        Draws the scene's texture, sensor noise and rain (same seed, same frames).
     options : RenderOptions
-        Infrared emitter power, motion blur and branch sway.
+        Switches of the renderer itself (IR emitter power, motion blur, lamp light, branch sway).
     """
 
     def __init__(
@@ -215,18 +191,19 @@ class CameraRenderer:
         Parameters
         ----------
         t_s : float
-            Simulated time of the frame, s from the start of the run.
-        agents : sequence of AgentState
-            The road users and animals at ``t_s``.
+            Simulated time, s from the start of the night.
+        agents : sequence of citysim.world.agents.AgentState
+            Every agent of the street (positions m, headings rad); those out of view are skipped.
         lamp_levels : sequence of float
-            Each street lamp's level, 0 (off) to 1 (full), in lamp order.
+            Each street lamp's light level, 0 (off) .. 1 (full), in lamp order.
         frame_index : int, optional
-            The camera's frame number (>= 0), for noise independent of earlier calls.
+            The camera's frame number (>= 0) that seeds this frame's noise and rain.
 
         Returns
         -------
         RenderedFrame
-            The 8-bit grey frame and its ground truth (each visible agent's box).
+            ``image``, the uint8 (H, W) frame, and ``truth``, the objects in view with their
+            boxes (OpenCV ``(x, y, w, h)`` px), visibility and distance (m).
         """
         ambient, emitter = self.ambient_light, self.options.ir_emitter_power
         if frame_index is not None and frame_index < 0:

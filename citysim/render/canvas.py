@@ -14,7 +14,7 @@ Conventions: canvas pixel ``(col, row)`` is the ideal (undistorted) image
 point ``(u, v) = (col + x0_px, row + y0_px)`` in OpenCV pixel coordinates
 (pixel centres on integers). With distortion the canvas is larger than the
 frame (barrel lenses see more than their pinhole), so it covers every frame
-pixel's ideal position. World frame of DESIGN.md, metres.
+pixel's ideal position. World frame of docs/design/architecture.md, metres.
 """
 
 from __future__ import annotations

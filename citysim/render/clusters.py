@@ -2,7 +2,7 @@
 
 The painter (``citysim.render.agents``) fills every agent's parts by rank into
 one buffer; this module splits the agents into *clusters* - boxes close
-together, image motions alike (``render_kernels.group_boxes``) - and turns
+together, image motions alike (``citysim.render.kernels.group_boxes``) - and turns
 each cluster's ranks into radiance on the frame in one go:
 
 * parts behind a nearer standing surface (``occluder_depth``) are cut out;
@@ -77,7 +77,7 @@ class Cluster:
 
 def clusters(agents: list[int], ctx: PaintFrame) -> list[Cluster]:
     """Agents (far to near) split into clusters: boxes close together, image motions alike
-    (within SHARED_BLUR_PX or SHARED_BLUR_FRACTION; ``render_kernels.group_boxes``). Clusters come
+    (within SHARED_BLUR_PX or SHARED_BLUR_FRACTION; ``citysim.render.kernels.group_boxes``). Clusters come
     far to near (by their nearest member)."""
     if not agents:
         return []

@@ -275,12 +275,12 @@ def pose_parts(
 
     Inputs: ``geometry`` (P, K + 1 + F, 3) each part's K vertices, centre and F face normals
     in its model frame; ``faces`` (P, 1 + F) its outline-table row and face offsets
-    (``render_models.DrawModel``); ``owner`` (P,) its agent; ``pose`` (N, 5) each agent's
+    (``citysim.render.models.DrawModel``); ``owner`` (P,) its agent; ``pose`` (N, 5) each agent's
     x, y (m), heading (rad), height (m), speed (m/s); ``rot`` (3, 3) world -> camera;
     ``pole`` (3,) camera position (m); ``camera_px`` (fx, fy, cx, cy) on the canvas;
-    ``table`` (T, 2**F, K) outline tables (``render_outline``); ``reflectance`` (P,);
+    ``table`` (T, 2**F, K) outline tables (``citysim.render.outline``); ``reflectance`` (P,);
     ``light`` (emitter gain, uniform irradiance, beam exponent; ``AgentLighting.constants``);
-    ``lamp_pos`` (L, 3) and ``lamp_level`` (L,) the lit lamps (``render_light.lamp_light``);
+    ``lamp_pos`` (L, 3) and ``lamp_level`` (L,) the lit lamps (``citysim.render.light.lamp_light``);
     ``canvas_wh`` (w, h).
 
     Outputs: ``cam_pts`` (P, K, 3) camera-frame vertices; ``polys`` (P, K, 2) int32 fixed-point
@@ -421,7 +421,7 @@ def add_spots(coarse, cell_ground, ground_to_cell, spots, touched):  # pragma: n
     ``spots`` (N, 11): per spot its origin x, y (m; the lamps' mean position), heading cos,
     sin, forward reach and half width of its ground box (m), and its beam's peak
     irradiance, centre ahead (m), forward sigma (m), lateral sigma (m), lateral spread per
-    metre ahead (``render_spots`` gives the formula). ``touched`` (4,) gets the cells box
+    metre ahead (``citysim.render.spots`` gives the formula). ``touched`` (4,) gets the cells box
     (x0, y0, x1, y1; exclusive ends) that received light."""
     ch, cw = coarse.shape
     touched[0], touched[1], touched[2], touched[3] = cw, ch, 0, 0

@@ -23,7 +23,7 @@ surface at distance ``r_m`` from the lens:
   horizontal: ``E = level * I(theta) * cos_surface / d**2``.
 * ``E_night``: sky glow, so unlit surfaces are not pitch black.
 
-Conventions: world frame of DESIGN.md (m), unit normals, distances in metres.
+Conventions: world frame of docs/design/architecture.md (m), unit normals, distances in metres.
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ def lamp_light(vx, vy, vz, nx, ny, nz, upright):  # pragma: no cover - compiled
     for a small upright body (person, car), which catches light about as well from every
     side: its cosine is taken as 0.5 plus half the lamp's elevation seen from the point.
     The one statement of the lamps' light: the background (``lamp_irradiance``) and the
-    agents (``render_kernels.pose_parts``) both use it."""
+    agents (``citysim.render.kernels.pose_parts``) both use it."""
     d2 = max(vx * vx + vy * vy + vz * vz, 0.25)
     d = math.sqrt(d2)
     cos_nadir = vz / d  # angle from the lamp's downward axis

@@ -8,7 +8,7 @@ outline table (``citysim.render.outline``), and poses all agents in one
 vectorised rotation + translation (``draw_models``); ``agent_shape`` gives one
 agent's exact model at its pose (for tests and tools).
 
-Conventions: world frame of DESIGN.md (x, y ground, z up, m); ``heading_rad``
+Conventions: world frame of docs/design/architecture.md (x, y ground, z up, m); ``heading_rad``
 counter-clockwise from +x; model dimensions as in ``detector.train.shapes``.
 """
 

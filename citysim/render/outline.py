@@ -1,22 +1,15 @@
 """Outlines of convex parts without a convex hull per part and frame.
 
-The image of a convex solid is the convex polygon bounded by its
-*silhouette*: the edges between faces that face the camera and faces that
-do not. Which faces face the camera is one sign per face; the silhouette for
-every combination of signs is worked out once per solid's *topology* (its
-faces as vertex cycles) and kept in a table. A frame then finds every part's
-outline with a few vectorised operations (face normals . view rays -> sign
-bits -> table row) instead of one ``cv2.convexHull`` call per part.
-
-Flat convex parts (wheels) have one outline: their vertices in cyclic order.
-Parts whose vertices do not make a clean convex polytope (coincident
-vertices, a vertex inside a face, too many faces) get no table; the renderer
-takes their hull as before.
+The silhouette for every combination of face signs is worked out once per solid's topology and
+kept in a table; a frame finds every part's outline from its sign bits. Flat parts (wheels) have
+one outline; parts that are no clean convex polytope get no table.
 
 Conventions: part vertices in any right-handed frame (the model's local
 frame f, l, z); faces are vertex cycles counter-clockwise seen from outside,
 normals point outward; an outline lists at most OUTLINE_VERTICES vertex
 indices, the last repeated to fill the row.
+
+Design: docs/design/modules.md (Outlines of convex parts)
 """
 
 from __future__ import annotations

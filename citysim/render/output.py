@@ -2,7 +2,7 @@
 
 Most of a street camera's view is still from one frame to the next: the
 lit background changes only when a lamp changes level. So the frame of the
-background alone (radiance -> DN -> lens remap, ``render_canvas``) is kept,
+background alone (radiance -> DN -> lens remap, ``citysim.render.canvas``) is kept,
 and a frame is that cached frame with the *boxes* that changed - where
 agents, spots, glare, crowns or insects were drawn on the canvas - converted
 and remapped again. Only the boxes are ever converted to DN and put back to
@@ -143,7 +143,7 @@ class FrameOutput:
 
 def merge_boxes(boxes: Sequence[Sequence[int]]) -> list[tuple[int, int, int, int]]:
     """Boxes (x0, y0, x1, y1) joined where one box costs less than two: their joint box
-    holds at most BOX_COST_PX more pixels than the two apart (``render_kernels.merge_box_list``).
+    holds at most BOX_COST_PX more pixels than the two apart (``citysim.render.kernels.merge_box_list``).
     Empty boxes are dropped."""
     if not len(boxes):
         return []

@@ -6,7 +6,7 @@ lamp poles the scenery lacks) are added, and the ground's near-infrared
 reflectance is painted by band (lane, kerb, sidewalk, verge, lane markings,
 zebra crossings) with a fixed world-space grain.
 
-Conventions: world frame of DESIGN.md (x along the street, y across, z up,
+Conventions: world frame of docs/design/architecture.md (x along the street, y across, z up,
 m); boxes are axis-aligned (a ``StaticObject``'s length runs along x).
 Ray casts take a ray origin (3,) and unit directions (N, 3) and return the
 distance ``t_m`` along the ray (inf on a miss) and the unit surface normal.

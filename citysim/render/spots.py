@@ -1,6 +1,6 @@
 """Headlight and flashlight spots on the ground ahead of lit agents.
 
-A lit agent (``AgentState.light_on``, a kind with a beam: ``render_beams.beam_of``)
+A lit agent (``AgentState.light_on``, a kind with a beam: ``citysim.render.beams.beam_of``)
 throws a spot on the ground ahead of it:
 ``E = peak * exp(-((f - centre)/sigma_f)^2) * exp(-(l / (sigma_l + spread * f))^2)``
 for ground points ``f`` m ahead of and ``l`` m beside its lamps' mean
@@ -9,13 +9,13 @@ ground box that holds the spot (``spot_extent_m``). Only pixels that see the
 ground get it (the spot lands before the agents are drawn, so they hide it).
 
 Spots are smooth, so ``E`` is evaluated at the centres of a grid SPOT_GRID
-times coarser than the canvas (``render_kernels.add_spots``, all lit agents in
+times coarser than the canvas (``citysim.render.kernels.add_spots``, all lit agents in
 one call, each only over the cells its ground box covers), scaled up only
 where it lights the ground visibly and weighted by each pixel's ground
 reflectance.
 
 Conventions: canvas pixels (``citysim.render.canvas``), world frame of
-DESIGN.md (m), radiance in linear full-scale units.
+docs/design/architecture.md (m), radiance in linear full-scale units.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ class SpotClass:
     #: forward reach (m) and half width (m) of the ground box holding the spot
     layout: tuple[float, float, float, float]
     #: layout, then the beam's peak irradiance, centre (m), forward and lateral sigma (m) and
-    #: spread per metre: what ``render_kernels.add_spots`` takes per spot
+    #: spread per metre: what ``citysim.render.kernels.add_spots`` takes per spot
     row: tuple[float, ...]
 
 

@@ -23,7 +23,7 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "the light itself, the dotted part the drivers' standby power and the hatched part the "
         "sensors and their computers. The label over a bar is its saving against always-on, which "
         "keeps every lamp at full: a lower bar saves more, but read it together with the lag "
-        "figures, since a controller that saves by leaving people in the dark is no saving.",
+        "figures, since a controller that saves by leaving people below full level is no saving.",
     ),
     "oracle_gap.png": ("Where each controller spends beyond the bound, lamp by lamp", GAP_HOW_TO_READ),
     "energy_per_hour.png": (
@@ -38,7 +38,7 @@ CAPTIONS: dict[str, tuple[str, str]] = {
         "across. The line is the lamp's true level (1 = full, the dim level when nobody is "
         "around); the bars under it are objects in that lamp's zone, one row per class. A good "
         "controller is at 1 before each bar starts and back to dim soon after it ends; a bar that "
-        "starts under a dim line is someone walking into the dark.",
+        "starts under a dim line is someone walking into a zone below full level (dimmed, not off).",
     ),
     "lag_cdf.png": (
         "Illumination lag per class",

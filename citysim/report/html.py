@@ -11,7 +11,7 @@ A run page says which clock hours the run covers and how many objects crossed (w
 warning when they are few), why a controller saves 0 % when its window is the reason,
 and reads the per-frame detection figures against the crossings. A sweep page shows
 the best settings per controller: the highest savings among settings where no object
-crossed an unlit zone (``unlit_crossings == 0``), and the lowest lag p95.
+crossed a zone whose lamp never reached full level (``unlit_crossings == 0``), and the lowest lag p95.
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ from citysim.report.common import (
     slug,
     to_float,
 )
+from citysim.report.wording import BELOW_FULL, best_installable_sentence
 from citysim.world.approaches import describe_short
 
 __all__ = ["best_settings", "write_report"]
@@ -62,8 +63,9 @@ figcaption .file { color: #888; font-size: 0.9em; }
 RUN_COLUMNS_HOWTO = (
     "Lag: seconds from an object entering a lamp's zone until that lamp is at full (p50: half "
     "the entries wait less, p95: all but 5 %); entries never lit count at their whole stay. "
-    "Unlit crossings: zone entries whose lamp never reached full while the object was in the "
-    "zone. Dark exposure: seconds objects spent in zones below full, summed over objects. "
+    "Never-full crossings: zone entries whose lamp never reached full level while the object was in the "
+    f"zone. Below-full exposure: seconds objects spent in zones whose lamp was {BELOW_FULL}, summed over "
+    "objects. "
     "False on-time: lamp-seconds above dim with nobody in the lamp's zone. Per-frame TPR and "
     "passes missed: the camera detector's figures (explained below the table)."
 )
@@ -85,7 +87,7 @@ def _figure(path: Path, kind: str, names: dict[str, str] | None = None) -> str:
     """The PNG embedded, with its caption: a short title, how to read it, and its file name."""
     data = base64.b64encode(path.read_bytes()).decode("ascii")
     title, sentence = caption_for(path.name, kind, names)
-    # alt is the file name (tests/citysim/test_sweep.py finds the images by it); the caption says the rest
+    # alt is the file name (tests/citysim/sweep/test_sweep.py finds the images by it); the caption says the rest
     return (f'<figure id="fig-{html.escape(path.stem)}"><img alt="{html.escape(path.name)}" '
             f'src="data:image/png;base64,{data}">'
             f"<figcaption><b>{html.escape(title)}.</b> {html.escape(sentence)} "
@@ -114,23 +116,14 @@ def _run_rows(figures: dict) -> list[list[str]]:
 
 
 def _verdict(figures: dict, facts) -> str:
-    """The controller saving most without an unlit crossing (saving nothing is no win)."""
-    from citysim.report.runfacts import ZERO_SAVINGS
-
-    safe = [(n, f) for n, f in figures.items() if n != REFERENCE and f.get("unlit_crossings") == 0]
-    saving = [(n, f) for n, f in safe if (f.get("savings_vs_always_on") or 0.0) >= ZERO_SAVINGS]
-    best = max(saving, key=lambda nf: nf[1]["savings_vs_always_on"], default=None)
-    if best is None:
-        what = ("Every smart controller let some object cross an unlit zone" if not safe else
-                "No smart controller both saved energy and lit every crossing")  # fmt: skip
-        return f"<p>{what}.</p>"
-    caveat = f" (on only {facts.objects} objects: see the warning above)" if facts.few_objects else ""
-    return (f"<p>Best controller with no unlit crossing: <b>{html.escape(best[0])}</b>, saving "
-            f"{fmt_pct(best[1]['savings_vs_always_on'])} against always-on{html.escape(caveat)}.</p>")
+    """The installable controller saving most among those lighting enough entries on entry
+    (``wording.best_installable``): never always_on or the oracle, and saving nothing is no win."""
+    caveat = f" These figures rest on only {facts.objects} objects: see the warning above." if facts.few_objects else ""
+    return f"<p>{html.escape(best_installable_sentence(figures) + caveat)}</p>"
 
 
 RUN_HEAD = ["controller", "energy", "savings vs always-on", "lag p50", "lag p95", "lag max",
-            "unlit crossings", "dark exposure", "switches", "false on-time", "per-frame TPR",
+            "never-full crossings", "below-full exposure", "switches", "false on-time", "per-frame TPR",
             "passes missed"]  # fmt: skip
 
 
@@ -178,8 +171,8 @@ def _run_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Path
 
 def best_settings(rows: list[dict[str, str]], axes: list[str]) -> list[dict]:
     """Per controller: the setting (axis values, seeds averaged) with the highest savings among
-    those with no unlit crossing in any seed (or, if none has 0, the fewest in the worst seed),
-    and the one with the lowest mean lag p95."""
+    those with no never-full crossing (a zone entry whose lamp never reached full level) in any
+    seed (or, if none has 0, the fewest in the worst seed), and the one with the lowest mean lag p95."""
     cells: dict[tuple, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     for r in rows:
         if r.get("status") != "ok" or r["controller"] == REFERENCE:
@@ -203,8 +196,8 @@ def best_settings(rows: list[dict[str, str]], axes: list[str]) -> list[dict]:
         by_savings = max(safe, key=lambda k: mean(safe[k]["savings_vs_always_on"]), default=None)
         with_lag = {k: v for k, v in mine.items() if not math.isnan(mean(v["lag_p95_s"]))}
         by_lag = min(with_lag, key=lambda k: mean(with_lag[k]["lag_p95_s"]), default=None)
-        savings_goal = ("highest savings, no unlit crossing" if fewest == 0 else
-                        f"highest savings, fewest unlit crossings ({fewest:g}; none has 0)")  # fmt: skip
+        savings_goal = ("highest savings, no never-full crossing" if fewest == 0 else
+                        f"highest savings, fewest never-full crossings ({fewest:g}; none has 0)")  # fmt: skip
         for goal, key in ((savings_goal, by_savings), ("lowest lag p95", by_lag)):
             if key is None:
                 out.append({"controller": controller, "goal": goal, "setting": None})
@@ -241,7 +234,7 @@ def _sweep_section(folder: Path, plots: list[Path] | None) -> tuple[str, list[Pa
         )
         rows.append([b["controller"], b["goal"], setting, fmt_pct(b["savings"]), fmt_quantity(b["lag_p95_s"], "s"),
                      fmt_num(b["unlit_crossings"]), str(b["seeds"])])  # fmt: skip
-    head = ["controller", "goal", "setting", "savings", "lag p95", "unlit crossings (max)", "seeds"]
+    head = ["controller", "goal", "setting", "savings", "lag p95", "never-full crossings (max)", "seeds"]
     body = intro + "<h2>Best settings</h2>" + _table(head, rows, left=3)
     if failed_points:
         shown = list(failed_points.items())[:10]

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from citysim.report.common import controller_color, plt, save, warn_few_objects
+from citysim.report.wording import LIT_ENOUGH
 from citysim.sim.compare import REFERENCE_CONTROLLERS
 
 #: The sentence a planner reads beside the plot.
@@ -26,7 +27,7 @@ HOW_TO_READ = (
     "point at one lamp is where a controller's gap to the bound comes from: an end lamp kept at "
     "full because no camera watches the street before it, or a lamp lit for people who went "
     "elsewhere; a point below zero is a lamp dimmer than the oracle's, where someone may have "
-    "walked into the dark."
+    "walked into a zone below full level (dimmed, not necessarily off)."
 )
 
 
@@ -48,9 +49,8 @@ def oracle_gap_wh(controllers: Mapping[str, Mapping]) -> dict[str, list[float]] 
     return gaps or None
 
 
-#: ``gap_line`` explains the gap of the controller saving most among those lighting at least this
-#: share of zone entries on entry (a gap bought with darkness needs no explaining).
-LIT_ENOUGH = 0.95
+#: ``gap_line`` explains the gap of the controller saving most among those lighting at least
+#: ``LIT_ENOUGH`` of zone entries on entry (a gap bought with darkness needs no explaining).
 
 
 def gap_line(summary: Mapping) -> str | None:

@@ -1,7 +1,7 @@
 """Planner plots of one run folder: energy per controller, lamp levels with passages, lag CDFs.
 
 ``plot_run(run_dir)`` reads DIR/summary.json, DIR/lamps.csv and DIR/objects.csv
-(the run folder of ``sim.run_comparison``) and writes DIR/plots/*.png:
+(the run folder of ``citysim.sim.compare.run_comparison``) and writes DIR/plots/*.png:
 
 * ``energy.png``: energy per controller (kWh), split into luminaire, standby and
   sensing where the summary has the split, labelled with savings vs always-on;

@@ -3,6 +3,12 @@
 from __future__ import annotations
 
 from citysim.report.oracle_gap import gap_line
+from citysim.report.wording import (
+    BELOW_FULL,
+    best_installable_sentence,
+    oracle_saves_nothing,
+    over_oracle_note,
+)
 from citysim.sim.compare import REFERENCE_CONTROLLERS
 from citysim.world.approaches import describe_short
 
@@ -28,21 +34,28 @@ def comparison_table(summary: dict) -> str:
     """The planner's two axes first (savings against always-on and the oracle's bound; the share
     of zone entries already lit), then darkness, lag and energy spent on nobody."""
     head = (f"{'controller':<20} {'energy kWh':>10} {'savings':>8} {'vs oracle':>9} {'lit entry':>9} "
-            f"{'95 % range':>11} {'dark s/100':>10} {'lag p95 s':>9} {'unlit':>6} {'false on lamp-s':>15}")  # fmt: skip
+            f"{'95 % range':>11} {'below-full s/100':>16} {'lag p95 s':>9} {'never full':>10} {'false on lamp-s':>15}")  # fmt: skip
+    no_bound = oracle_saves_nothing(summary["controllers"])
     lines = [f"{summary['scenario']}: {summary['duration_s']:.0f} s simulated, seed {summary['seed']}",
              head, "-" * len(head)]  # fmt: skip
     for name, c in summary["controllers"].items():
         lines.append(
             f"{name:<20} {c['energy_kwh']:>10.3f} {_pct(c['savings_vs_always_on']):>8} "
-            f"{_pct(c.get('savings_vs_oracle')):>9} {_pct(c.get('lit_on_entry_rate')):>9} {_interval(c):>11} "
-            f"{_num(c.get('dark_s_per_100_entries'), '10.1f'):>10} {_num(c['lag_p95_s'], '9.2f'):>9} "
-            f"{c['unlit_crossings']:>6d} {c['false_on_time_s']:>15,.0f}"
+            f"{_pct(None if no_bound else c.get('savings_vs_oracle')):>9} {_pct(c.get('lit_on_entry_rate')):>9} "
+            f"{_interval(c):>11} "
+            f"{_num(c.get('dark_s_per_100_entries'), '16.1f'):>16} {_num(c['lag_p95_s'], '9.2f'):>9} "
+            f"{c['unlit_crossings']:>10d} {c['false_on_time_s']:>15,.0f}"
         )
     lines.append("savings: energy saved against always-on lamps on the same night; vs oracle: that saving as a "
                  "share of the perfect-knowledge bound's; lit entry: share of zone entries whose lamp was "
                  "already at full level; 95 % range: how far that share could be off from this run's road users "
-                 "alone (few road users, wide range); dark s/100: seconds spent in under-lit zones per 100 zone "
-                 "entries.")
+                 f"alone (few road users, wide range); below-full s/100: seconds road users spent in a zone whose "
+                 f"lamp was {BELOW_FULL}, per 100 zone entries; never full: zone entries whose lamp never reached "
+                 "full level while the road user was in the zone.")
+    notes = (no_bound or over_oracle_note(summary["controllers"]), best_installable_sentence(summary["controllers"]))
+    for note in notes:
+        if note:
+            lines.append(note)
     coverage = summary.get("coverage")
     if coverage:
         blind = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in coverage["blind_stretches_m"]) or "none"

@@ -10,7 +10,7 @@ With ``coverage`` (``citysim.world.coverage.coverage_grid``) the picture also sh
 lamp camera sees a person whole within the detector's range (green cells) and where it does not
 (red cells), with the blind stretches along the street as red bars on the top edge.
 
-Conventions: world frame of DESIGN.md (x along the street, y across it, m);
+Conventions: world frame of docs/design/architecture.md (x along the street, y across it, m);
 tracks are ``{object_id: (T, 2) array of (x_m, y_m)}``.
 """
 

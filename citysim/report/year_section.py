@@ -17,22 +17,25 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from citysim.report.common import controller_color, fmt_num, fmt_pct, fmt_quantity, save  # noqa: E402
+from citysim.report.wording import BELOW_FULL  # noqa: E402
+from citysim.report.year_entries import FEW_ENTRIES_RULE, entries_cell, entries_of, too_few  # noqa: E402
 
 MONTHS = ("Jan", "Feb", "Mar", "Apr", "May", "Jun", "Jul", "Aug", "Sep", "Oct", "Nov", "Dec")
 MONTHLY_PLOT = "monthly_energy.png"
 MONTHLY_HOWTO = (
     "Energy each controller uses in each month, kWh: one line per controller. Months with long nights "
     "sit high; the gap between always_on and a controller is its saving that month, and the oracle's "
-    "line is the lowest any controller can go without leaving someone in the dark."
+    "line is the lowest any controller can go without leaving someone below full level."
 )
 TABLE_HOWTO = (
     "Per controller over the whole year: energy, its saving against always-on, cost at the scenario's "
     "tariff, CO2 at its grid factor, and the AECI (EN 13201-5's annual energy per square metre lit, "
     "Wh/m2: lower is better, and it compares streets of different sizes). Lit on entry is the share "
-    "of all zone entries of the year whose lamp was already at full level; dark s is the seconds road "
-    "users spent in a zone below full, summed over the year. In brackets beside lit on entry, a 95 % "
-    "interval: the road users of the table's traffic-level runs resampled, so it shows how far the rate "
-    "could be off from those few hundred entries alone (not the sensor model's own error)."
+    "of all zone entries of the year whose lamp was already at full level; below-full s is the seconds road "
+    f"users spent in a zone whose lamp was {BELOW_FULL}, summed over the year. In brackets beside lit on "
+    "entry, a 95 % interval: the road users of the table's traffic-level runs resampled, so it shows how far "
+    "the rate could be off from those few hundred entries alone (not the sensor model's own error); then "
+    "the entries the rate is read from."
 )
 
 
@@ -65,55 +68,13 @@ def _rows(result: dict) -> list[list[str]]:
     for label, f in result["controllers"].items():
         rows.append([label, fmt_quantity(f["energy_kwh_per_year"], "kWh"), fmt_pct(f["savings_vs_always_on"]),
                      fmt_quantity(f["cost_per_year"], cur), fmt_quantity(f["co2_kg_per_year"], "kg"),
-                     fmt_quantity(f["aeci_wh_per_m2"], "Wh/m2"), lit_with_interval(f),
+                     fmt_quantity(f["aeci_wh_per_m2"], "Wh/m2"),
+                     lit_with_interval(f) + entries_cell(label, f, entries_of(result, label)),
                      fmt_num(f["dark_s_per_year"])])  # fmt: skip
     return rows
 
 
-MONEY_HEAD = ["controller", "capex", "opex / year", "saved / year", "payback", "NPV", "CO2 avoided"]
-#: How to read each money column, one sentence each (report.html prints them under the money table).
-MONEY_HOWTO = (
-    ("capex", "what fitting every pole of the street with the controller's hardware costs once "
-     "(hardware plus installation per pole; always-on needs none)"),
-    ("opex / year", "the hardware's yearly upkeep over all poles"),
-    ("saved / year", "the first year's net saving against always-on: the energy saved at the first "
-     "year's price minus the upkeep (negative: the upkeep costs more than the light it saves)"),
-    ("payback", "years until the net savings (the price changing yearly as set) add up to the capex; "
-     "shorter is better, and a payback longer than the hardware's lifetime means it never pays for itself"),
-    ("NPV", "net present value over the hardware's lifetime: every year's net saving discounted at the "
-     "discount rate, minus the capex; above 0 the investment pays, and the larger the better"),
-    ("CO2 avoided", "kg CO2 not emitted over the lifetime: the energy saved a year x the grid factor x "
-     "the lifetime years"),
-)
-
-
-def money_rows(result: dict) -> list[list[str]]:
-    """One row per controller of the money figures (``citysim.year.money``); [] for a year.json without them."""
-    cur = result["currency"]
-    rows = []
-    for label, f in result["controllers"].items():
-        if "capex" not in f:
-            return []
-        payback = f["payback_years"]
-        rows.append([label, fmt_quantity(f["capex"], cur), fmt_quantity(f["opex_per_year"], cur),
-                     fmt_quantity(f["money_saved_per_year"], cur),
-                     "never" if payback is None else f"{payback:.1f} y", fmt_quantity(f["npv"], cur),
-                     fmt_quantity(f["co2_avoided_kg_over_lifetime"], "kg")])  # fmt: skip
-    return rows
-
-
-def money_facts(result: dict) -> str:
-    """One sentence: the prices, lifetime and discount rate the money figures assume."""
-    m = result.get("money")
-    if not m:
-        return ""
-    return (f"Money for {m['poles']} poles at {m['price_per_kwh']:g} {result['currency']}/kWh in the first year, "
-            f"changing {100 * m['price_change_per_year']:+g} % a year, {m['kg_co2_per_kwh']:g} kg CO2/kWh, "
-            f"{m['lifetime_years']} years of hardware life, discounted at {100 * m['discount_rate']:g} % a year "
-            "(the scenario's costs section).")
-
-
-HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "dark s / year"]
+MONEY_HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "below-full s / year"]
 
 
 def lit_with_interval(figures: dict) -> str:
@@ -138,11 +99,11 @@ def year_table(result: dict) -> str:
     lines = ["  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True)))
              for r in rows]  # fmt: skip
     # a rate read off a few hundred entries cannot show a 1-3 % dark share reliably: say how few
-    note = (f"lit on entry and dark s / year are read from {sampled_entries(result):,} zone entries measured in the "
+    note = (f"lit on entry and below-full s / year are read from {sampled_entries(result):,} zone entries measured in the "
             f"table's traffic-level runs ({fmt_num(result['sample_s'])} s each); in brackets a 95 % interval from "
             "resampling their road users; a whole night in fast mode (citysim run --fidelity fast --duration "
             "28800) counts thousands")
-    out = [lines[0], "-" * len(lines[0]), *lines[1:], note]
+    out = [lines[0], "-" * len(lines[0]), *lines[1:], note, *_few_entries(result)]
     money = money_rows(result)
     if money:
         rows = [MONEY_HEAD, *money]
@@ -151,6 +112,12 @@ def year_table(result: dict) -> str:
                  for r in rows]  # fmt: skip
         out += ["", lines[0], "-" * len(lines[0]), *lines[1:], money_facts(result)]
     return "\n".join(out)
+
+
+def _few_entries(result: dict) -> list[str]:
+    """The warning under a year table with a rate too few entries to read (``year_entries``), or none."""
+    flagged = [label for label, f in result["controllers"].items() if too_few(label, f, entries_of(result, label))]
+    return [FEW_ENTRIES_RULE] if flagged else []
 
 
 def _html_table(head: list[str], rows: list[list[str]]) -> str:
@@ -209,6 +176,7 @@ def year_section(folder: str | Path) -> str:
     figure = (f'<figure id="fig-monthly_energy"><img alt="{MONTHLY_PLOT}" src="data:image/png;base64,{data}">'
               f"<figcaption><b>Energy per month.</b> {html.escape(MONTHLY_HOWTO)} "
               f'<span class="file">(plots/{MONTHLY_PLOT})</span></figcaption></figure>')
+    note += "".join(f"<p class='note'>{html.escape(line)}</p>" for line in _few_entries(r))
     return ("<h2>A year</h2>" + _facts(r) + _html_table(HEAD, _rows(r))
             + f"<p class='howto'>{html.escape(TABLE_HOWTO)}</p>" + note + _money(r) + figure + _checks(r))
 

@@ -1,31 +1,10 @@
 """Calibrate a scenario's sensor model (``citysim.fast``) from full-fidelity render-and-detect.
 
-``calibrate`` runs the scenario's street, cameras and environment in full fidelity under
-``CALIBRATION_CONTROLLER`` on seeds set aside for it (validation never uses them), records what
-the real detector did with every candidate (``citysim.fast.records``), fits the model and caches
-it in ``cache_dir`` under a hash of what it depends on: the placed cameras and poles, the street
-and its scenery, the environment, the dim level, the idle-frame stride, the traffic kinds, the
-detector's model file and the calibration settings. ``sensor_model_for`` loads the cached model,
-else the one shipped in the repository (``SHIPPED_DIR``, same name and key, so ``make demo`` and a
-fresh clone need no calibration), else calibrates. A shipped model is data, never refitted;
-``tests/citysim/fast/test_shipped_models.py`` fails as soon as its key no longer matches its scenario.
+``calibrate`` runs busy, quiet (lamps held dim) and region nights on seeds set aside for it,
+fits the model and caches it under a hash of what it depends on; ``sensor_model_for`` loads
+the cached model, else the shipped one (``SHIPPED_DIR``), else calibrates.
 
-Three kinds of nights, ``runs`` of each (``calibration_nights``), ``duration_s`` long:
-
-* busy nights (seeds ``CALIBRATION_SEED_BASE + i``), at ``TRAFFIC_FACTOR`` times the scenario's
-  target traffic (more people per rendered frame): the calibration controller lights the lamps
-  as it would; with that much traffic nearly everyone is seen under lit lamps;
-* quiet nights (seeds ``QUIET_SEED_BASE + i``): the same, but every lamp is held dim
-  (``run_controller(lamps_held_dim=True)``). In the quiet hours, where adaptive lighting earns
-  most, people arrive under dim lamps, and busy nights hardly show that: with busy nights alone
-  (model v14) calibration saw 4 cars coming toward a camera under dim lamps, fast mode's
-  ``detector_located`` lit 68 % of zone entries on entry at 02:00 (seed 2) where full fidelity
-  lit 95.5 %, and with quiet nights added 95.5 % (docs/design/validation.md);
-* region nights (seeds ``REGION_SEED_BASE + i``), one per threshold baseline and seed, at the
-  scenario's own traffic, the lamps switched by that baseline: the threshold baselines' region
-  sizes come from these alone (``citysim.fast.region_records`` says why).
-
-The detector's tables and false alarms come from the busy and quiet nights.
+Design: docs/design/fast-mode-sensor-model.md
 """
 
 from __future__ import annotations

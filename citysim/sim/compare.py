@@ -8,7 +8,7 @@ every controller replays it instead of stepping its own pymunk world: the same
 agents bit for bit, the world's cost paid once. The run folder is staged and
 moved into place only when every controller finished:
 
-    DIR/summary.json   figures per controller (see docs/guide/run.md)
+    DIR/summary.json   figures per controller (``ControllerRun.summary``)
     DIR/objects.csv    one row per object and lamp zone it crossed
     DIR/lamps.csv      level and power of every lamp, every simulated second
 """
@@ -186,43 +186,43 @@ def run_comparison(
     cache_dir: Path | None = None,
     share_frames: bool = False,
 ) -> dict:
-    """Run every controller over the scenario's night on the same traffic; the summary.json dict.
+    """Run the controllers on the same traffic; return the summary.json dict and, with ``out_dir``,
+    write the run folder (summary.json, objects.csv, lamps.csv; ``citysim.report`` plots them).
 
     Parameters
     ----------
-    scenario : Scenario
-        The validated scenario; its ``duration_s`` (s) and ``seed`` set the night.
+    scenario : citysim.config.scenario.Scenario
+        The night to run; ``scenario.duration_s`` (s) simulated per controller.
     controllers : sequence of str, optional
-        Controller names or labels (default: the scenario's list); ``always_on`` is added.
+        Registered controller names (``citysim.control.registry``); None: the scenario's list.
+        always_on and the oracle are always added (the savings and the bound).
     progress : bool
-        Show a progress bar.
-    out_dir : Path, optional
-        Run folder to write (summary.json, objects.csv, lamps.csv), staged: an interrupted run
-        leaves nothing; the plots are drawn by ``citysim.report`` from these.
+        Show a progress bar of simulated seconds, with rate and time left.
+    out_dir : pathlib.Path, optional
+        The run folder to write (staged: nothing half-written); None writes nothing.
     workers : int
-        Parallel processes, one controller (or group) each.
+        Processes to run the controllers in (at most one per controller).
     scenario_file : str, optional
-        The scenario's path, recorded in summary.json.
+        The scenario's file name, recorded in summary.json.
     replay_traffic : bool
-        Simulate the traffic once and replay it to every controller; False steps a world per
-        controller (the same results, bit for bit, at a higher cost).
+        Simulate the traffic once and replay it to every controller (the default); False steps a
+        world per controller (the same results, bit for bit, at a higher cost).
     fidelity : {"full", "fast"}
-        "full" renders and detects every judged frame; "fast" judges cameras with the scenario's
-        sensor model (``sensor_model``, else the one cached in ``cache_dir``, calibrated first if
-        there is none; see ``citysim.sim.calibration``).
-    sensor_model : SensorModel, optional
-    cache_dir : Path, optional
-        Folder of calibrated sensor models (default: .cache/sensor_models in the project).
+        "fast": cameras judged by the scenario's sensor model (``sensor_model``, else the one cached
+        in ``cache_dir``, calibrated first if there is none; ``citysim.sim.calibration``).
+    sensor_model, cache_dir : citysim.fast.model.SensorModel, pathlib.Path, optional
+        The model fast mode draws from; the folder where calibrated models are cached.
     share_frames : bool
-        At full fidelity, run the camera controllers in step, a group per worker, rendering a frame
-        once for all of a group whose lamps stand alike (the same results, bit for bit). Off by
-        default: on suburban_night it saves renders but not time.
+        At full fidelity, run the camera controllers in step, a group per worker, rendering a
+        frame once for all of a group whose lamps stand alike (the same results, bit for bit).
+        Off by default: on suburban_night it saves renders but not time.
 
     Returns
     -------
     dict
-        summary.json's contents: the run's facts, ``coverage``, ``approaches`` and, under
-        ``controllers``, each one's figures (``energy_kwh``, ``savings_vs_always_on``, ...).
+        summary.json: scenario, seed, duration_s (s), fidelity, lamps, camera coverage,
+        approaches, and per controller label its figures (energy_kwh, savings_vs_always_on and
+        savings_vs_oracle as shares, lit_on_entry_rate 0..1, lags and dark seconds in s, ...).
     """
     specs = resolve_controllers(scenario, controllers)
     check_fidelity(fidelity)

@@ -134,34 +134,42 @@ def run_controller(
 class ControllerRun:
     """One controller's night, set up and ready to run.
 
-    ``night.run_whole_seconds(on_second)`` runs it alone; ``citysim.sim.together`` runs several a
-    second at a time, sharing frames; ``summary()`` gives its summary.json entry at the end.
-
     Parameters
     ----------
-    scenario : Scenario
-        The validated scenario.
-    spec : ControllerSpec
-        The controller and its parameters.
+    scenario : citysim.config.scenario.Scenario
+        The street, lamps, traffic and environment; ``scenario.duration_s`` (s) is the night's length.
+    spec : citysim.config.scenario.ControllerSpec
+        The controller to run and its settings.
     lamps_writer, objects_writer : csv.writer, optional
-        Where lamps.csv and objects.csv rows go (none: not written).
-    traffic : Path, optional
+        Where lamps.csv rows (one per lamp and second) and objects.csv rows (one per zone visit)
+        go; None writes none.
+    traffic : pathlib.Path, optional
         A folder of this scenario's recorded traffic (``citysim.sim.replay``) to replay instead of
         stepping the world; the agents, and so the summary, are the same bit for bit.
     fidelity : {"full", "fast"}
-        "fast" needs ``sensor_model``.
-    sensor_model : SensorModel, optional
-        ``citysim.fast.model.SensorModel``, see ``citysim.sim.calibration``.
+        "full" renders every judged camera frame and runs the detector on it; "fast" draws the
+        detections from ``sensor_model``.
+    sensor_model : citysim.fast.model.SensorModel, optional
+        Needed for ``fidelity="fast"`` with a camera controller (see ``citysim.sim.calibration``).
     sensors : object, optional
-        Replaces the cameras' detectors at full fidelity (calibration records them).
-    observers : sequence of Collector
+        Replaces the cameras' detectors in full fidelity (calibration records them).
+    observers : sequence of citysim.metrics.collector.Collector
         Extra collectors (calibration's recorder).
     lamps_held_dim : bool
         The controller's triggers (``LampBank.trigger``, how every controller but the clock
         schedules lights a lamp) change no level, so the lamps stay dim (calibration's quiet nights).
-    shared_frames : SharedFrames, optional
+    shared_frames : citysim.sim.frames.SharedFrames, optional
         Full fidelity's camera frames are taken from, and given to, the frames of the controllers
         run in step with this one (``citysim.sim.together``).
+
+    Attributes
+    ----------
+    night : citysim.sim.night.Night
+        The simpy environment, world and cameras of this run.
+    controller : citysim.control.base.Controller
+        The controller switching the lamps.
+    collectors : list of citysim.metrics.collector.Collector
+        What the run measures; ``summary()`` gathers their figures.
     """
 
     def __init__(
@@ -229,12 +237,25 @@ class ControllerRun:
         return after_step
 
     def on_second(self, t_s: float) -> None:
-        """Before second ``t_s`` runs: the collectors that count seconds (lamps.csv, hourly energy)."""
+        """Before second ``t_s`` runs: the collectors that count seconds (lamps.csv, hourly energy).
+
+        Parameters
+        ----------
+        t_s : float
+            Simulated time, s from the start of the night (a whole second).
+        """
         for collector in self._second_collectors:
             collector.on_second(t_s)
 
     def summary(self) -> dict:
-        """The run's summary.json entry, once the clock has reached the scenario's end."""
+        """The run's summary.json entry, once the clock has reached the scenario's end.
+
+        Returns
+        -------
+        dict
+            The controller's figures (keys ``SUMMARY_KEYS``): energy in kWh, savings and
+            lit-on-entry rates as shares 0..1, lags and dark exposure in s, counts.
+        """
         figures: dict[str, Any] = {"controller": self.spec.name}
         for collector in self.collectors:
             figures.update(collector.finish(self.scenario.duration_s))

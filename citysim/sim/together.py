@@ -2,23 +2,10 @@
 
 Every controller of ``citysim.sim.compare`` runs here, most alone (a group of one runs exactly
 as ``citysim.sim.loop.run_controller`` runs it). Several full-fidelity camera controllers run in
-step render each frame once:
+step render each frame once (``citysim.sim.frames.SharedFrames``); each controller's files are
+those of its run alone, bit for bit. Only when asked (``share_frames=True``).
 
-Rendering is about two fifths of a full-fidelity camera controller's time (the rest is the
-detector), and every camera controller of a comparison films the same street on the same
-clock. Run a second at a time, one controller after the other, they ask for the same frames
-within the same second, and ``citysim.sim.frames.SharedFrames`` hands a frame rendered for one
-to all of those whose lamps all stand at the same levels. Each controller's summary, lamps.csv
-and objects.csv are those of its run alone, bit for bit (``tests/citysim/sim/test_together.py``).
-
-Measured on suburban_night it saves no time, so ``run_comparison`` runs it only when asked
-(``share_frames=True``). Each controller's lamps differ somewhere most of the time
-(``detector_located`` keeps the first lamp at full all night), and any difference, however far,
-makes a frame another's: at 02:00 seven camera controllers asked for 12,034 frames over 120 s,
-and in one group 27 % were shared. The frames shared are the cheap ones (an empty street under
-the still view a renderer keeps): four camera controllers over 200 s at 23:00 rendered 8,064
-frames in 5.9 CPU-s in step against 10,741 in 6.5 CPU-s one after the other, 33.9 against
-34.4 CPU-s in all.
+Design: docs/design/modules.md (Controllers in step, sharing frames)
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
 into points (axes x seeds), skips the points DIR/results.csv already holds,
 and runs the rest on Dask distributed: a ``LocalCluster`` of single-threaded
 worker processes by default, or the cluster behind ``scheduler`` (an address
-such as ``tcp://10.0.0.5:8786``). Each task runs ``sim.run_comparison`` for
+such as ``tcp://10.0.0.5:8786``). Each task runs ``citysim.sim.compare.run_comparison`` for
 one point (every controller on the same traffic) and returns its rows; the
 client process alone appends them to results.csv the moment the task finishes,
 so an interrupted sweep resumes where it stopped. A point whose scenario is

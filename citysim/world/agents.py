@@ -6,7 +6,7 @@ The world (``citysim.world.physics``) owns the pymunk bodies; each physics step 
 hand out immutable ``AgentState`` snapshots. Renderers and metrics read those
 snapshots and never touch the physics.
 
-Conventions: world frame of DESIGN.md (x along the street, y across, z up, m).
+Conventions: world frame of docs/design/architecture.md (x along the street, y across, z up, m).
 ``heading_rad`` is the direction of motion in the ground plane, counter-clockwise
 from +x. ``length_m`` is the extent along the heading (the paper's Table 1
 "depth"), ``width_m`` across it, ``height_m`` up.

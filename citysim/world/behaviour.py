@@ -1,33 +1,15 @@
 """How agents decide their motion, each physics step, over all agents at once.
 
-``move_agents`` reads every agent's pose and route and decides its next move, as the velocity
-and angular velocity its pymunk kinematic body is given for the step (``citysim.world.bodies``):
+``move_agents`` reads every agent's pose and route and decides its next move (longitudinal:
+the Intelligent Driver Model; lateral: ``choose_offset``; giving way: ``must_wait``; no overlap:
+``resolve_overlaps``) as the velocity and angular velocity its pymunk kinematic body is given
+for the step (``citysim.world.bodies``). The rules run compiled (numba), the same bit for bit on
+any machine.
 
-* longitudinal: the Intelligent Driver Model (Treiber, Hennecke & Helbing
-  2000) toward the desired speed, with the nearest agent ahead in the corridor
-  as leader (vehicles follow vehicles, brake for crossing pedestrians and
-  animals; walkers slow behind walkers), plus a hard clamp that never moves an
-  agent into its leader (half the gap for an oncoming one);
-* lateral: the offset within the leg's band that maximises the free distance
-  coverable within ``horizon_s``, minus reluctance to leave the preferred side
-  or the comfort band (``choose_offset``): walkers keep right and step aside,
-  cars swing out around cyclists, runners overtake; facing someone oncoming,
-  both step to the band's edge; the held-up grow impatient;
-* giving way: a walker about to cross the road waits at the kerb while a
-  vehicle or cyclist would reach the crossing before the walker has left its
-  strip of road (``must_wait``);
-* last resort: proposed poses are checked pairwise as oriented boxes and a
-  move that would overlap is cut back (its turn, its sidestep, all of it)
-  (``resolve_overlaps``), so no two footprints ever overlap.
-
-The rules run compiled (``citysim.world.behaviour_compiled``, ``conflicts_compiled`` and
-``moves_compiled``, numba); what they need of transcendental functions and of BLAS (cosines and
-sines of heading differences, velocities along the legs, a power, the swerve's arctan2) and the
-exact overlap check are computed here with numpy, between the compiled passes, as before they
-were compiled, so the trajectories are the same bit for bit on any machine.
-
-Conventions: world frame of DESIGN.md; offsets are metres to the left of the
+Conventions: world frame of docs/design/architecture.md; offsets are metres to the left of the
 leg direction (``citysim.world.geometry``); speeds m/s; angles rad CCW from +x.
+
+Design: docs/design/modules.md (Agent behaviour)
 """
 
 from __future__ import annotations

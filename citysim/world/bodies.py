@@ -15,7 +15,7 @@ four property calls per body. The space keeps its bodies in its own order (remov
 its last body into the gap), so ``Bodies`` keeps the row of each of the space's bodies, asked
 again of the space (by the bodies' ids) after agents entered or left.
 
-Conventions: world frame of DESIGN.md, metres, seconds; angles rad CCW from +x.
+Conventions: world frame of docs/design/architecture.md, metres, seconds; angles rad CCW from +x.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Conflicts between moving agents: which moves are cut back so that no two footprints overlap
 (the last resort after the behaviour model's own spacing). Who gives way at a crossing is
-decided compiled (``citysim.world.conflicts_compiled``); this check stays in numpy, as it ran
-before the behaviour was compiled (it is needed in few steps: only when bounding circles meet).
+decided compiled (``citysim.world.conflicts_compiled``); this check stays in numpy (it is needed
+in few steps: only when bounding circles meet).
 
 Conventions: world frame, metres, seconds; positions (N, 2), headings rad CCW from +x.
 """

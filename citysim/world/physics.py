@@ -14,7 +14,7 @@ they leave at the street ends (or at the end of their route) and are removed
 from the space (and their rows dropped), so memory stays flat. Same street, same spawns, same
 rng -> the same trajectories, bit for bit.
 
-Conventions: world frame of DESIGN.md, metres, seconds, m/s; angles rad CCW from +x.
+Conventions: world frame of docs/design/architecture.md, metres, seconds, m/s; angles rad CCW from +x.
 """
 
 from __future__ import annotations

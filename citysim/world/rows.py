@@ -8,7 +8,7 @@ the behaviour wants them). The pose is the agent's pymunk body's, read back afte
 it. ``Mover`` keeps what the compiled step never reads: the agent's id, traits, route and group
 members' gait phases.
 
-Conventions: world frame of DESIGN.md, metres, seconds, m/s; angles rad CCW from +x; leg offsets
+Conventions: world frame of docs/design/architecture.md, metres, seconds, m/s; angles rad CCW from +x; leg offsets
 metres to the left of the leg direction (``citysim.world.geometry``).
 """
 

@@ -1,7 +1,7 @@
 """The static street: lanes, sidewalks, kerbs, the lamp chain and scenery.
 
 Pure geometry and reflectances, built once per scenario; the world moves agents
-over it and the renderer paints it. Conventions: world frame of DESIGN.md (x
+over it and the renderer paints it. Conventions: world frame of docs/design/architecture.md (x
 along the street from 0 to ``length_m``, y across it, z up, m). Lane and
 sidewalk positions are given by the y of their centre line.
 """

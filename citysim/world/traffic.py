@@ -13,7 +13,7 @@ planner, ``citysim.config.kinds.AgentKind.route``):
 * "lane" (vehicles): keep a lane in its direction;
 * "verge_wander" (animals): come out of the verge, wander across the street and leave.
 
-Conventions: world frame of DESIGN.md; leg offsets are metres to the left of
+Conventions: world frame of docs/design/architecture.md; leg offsets are metres to the left of
 the direction of travel (see ``citysim.world.geometry``).
 """
 
@@ -225,7 +225,7 @@ def arrivals(
 
 
 def scripted_arrival(street: Street, agent, night: bool) -> tuple[AgentTraits, Route]:
-    """The traits and route of one scripted agent (``config_traffic.ScriptedAgent``).
+    """The traits and route of one scripted agent (``citysim.config.traffic.ScriptedAgent``).
 
     Its looks are the middle of its class's Table 1 ranges, so a scripted run is the same
     whatever the random traffic does; it keeps its lane or sidewalk from end to end.

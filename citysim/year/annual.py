@@ -1,19 +1,11 @@
 """Annual figures: every dark hour of the year read off the response table and summed.
 
-For a piece of dark hour (clock hour ``h``, traffic level ``L``, ``f`` hours long) each
-controller's energy is ``f x (idle(h) + traffic(L))``, where ``idle(h)`` is the idle run of
-hour ``h`` and ``traffic(L)`` what level ``L`` adds above the idle lamps at the reference hour,
-interpolated linearly between the table's levels (0 is the idle reference hour; above the
-highest level the last segment is extended, and the hours that needed it are counted).
-Zone entries, lit entries and dark seconds come from the level runs the same way. A
-controller that reads the clock (its idle energy differs between hours, as a part-night
-schedule's does) is marked ``reads_clock`` and gets no lit-entry or dark figure: the level runs
-show its light at the reference hour only.
+A piece of dark hour ``f`` hours long at clock hour ``h`` and traffic level ``L`` uses
+``f x (idle(h) + traffic(L))`` kWh, ``traffic`` interpolated between the table's levels; a
+controller that reads the clock gets no lit-entry or dark figure. The AECI (EN 13201-5) is the
+year's energy over the lit area, Wh/m2.
 
-EN 13201-5's annual energy consumption indicator (AECI) is the installation's energy over a
-year divided by the area it lights, Wh/m2; here the area is the lamp chain's length (the
-lamps' zones end to end) times the lit width (``year.lit_width_m``, or the street's outer
-lane and sidewalk edges).
+Design: docs/design/year-response-table.md
 """
 
 from __future__ import annotations

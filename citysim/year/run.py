@@ -54,8 +54,11 @@ def run_year(plan: YearPlan, out_dir: Path, names: list[str] | None = None, *, w
         ``cost_per_year``, ``co2_kg_per_year``, ``aeci_wh_per_m2`` (Wh/m²), ``lit_on_entry_rate``
         and its 95 % interval, ``zone_entries_per_year``, ``dark_s_per_year``, and the money against always-on
         (``capex``, ``opex_per_year``, ``money_saved_per_year``, ``payback_years``, ``npv``,
-        ``co2_avoided_kg_over_lifetime``); the table and the
-        check nights.
+        ``co2_avoided_kg_over_lifetime``); the table and the check nights.
+
+    Notes
+    -----
+    Design: docs/design/year-response-table.md.
     """
     table = build_table(plan.scenario, plan.year, plan.dark_hours, names, workers=workers, fidelity=fidelity,
                         progress=progress, sensor_model=sensor_model)  # fmt: skip

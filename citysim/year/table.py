@@ -1,20 +1,10 @@
 """The hourly response table: what each controller does in one hour at a given traffic level.
 
-A year cannot be simulated night by night, and the physics of the street (every agent moved
-30 times a second, once per controller) is most of a run's cost, so the table is small:
+One level run per traffic level (at the scenario's ``start_hour``, ``warmup_s`` then
+``sample_s`` measured) and one idle run per clock hour that can be dark; each run is one
+``citysim.sim.compare.run_comparison``. Figures are per hour (window totals x 3600 / window).
 
-* one *level run* per traffic level (``year.traffic_levels``), at the scenario's ``start_hour``:
-  every class at ``level x rate_per_hour``, the street filled for ``warmup_s`` first, then
-  ``sample_s`` measured. It gives what traffic costs: energy above the idle lamps, zone
-  entries, entries already lit, dark seconds;
-* one *idle run* per clock hour that can be dark, with nobody about (animals only) for
-  ``idle_sample_s``: the energy of lamps left to their clock (a part-night schedule dims at
-  midnight; a sensing lamp idles the same at every hour).
-
-An hour's energy is then its idle energy plus what its traffic level adds at the reference
-hour (``annual``). Each run is one ``citysim.sim.compare.run_comparison`` of every controller
-on the same traffic, written to a scratch folder whose lamps.csv and objects.csv give the
-figures inside the measured window only. Figures are per hour (window totals x 3600 / window).
+Design: docs/design/year-response-table.md
 """
 
 from __future__ import annotations

@@ -1,32 +1,10 @@
 """Which region of this frame continues which track: gated, greedy, in the image and on the ground.
 
-Each track predicts its box (last box moved on by its image velocity) and its ground point
-(last position moved on by its ground velocity, ``detector.tracks.track``). A region may
-continue a track when it passes either gate:
+A region may continue a track when it passes the image gate (IoU or centre distance) or the
+ground gate (``base_gate_m + gate_per_m * forward_m``, m), and its box area is within
+``max_area_ratio`` of the track's; pairs are scored and taken best first.
 
-* image: IoU with the predicted box at least ``min_iou``, or centre within ``max_centre_diag``
-  predicted-box diagonals;
-* ground: bottom centre within ``gate_m`` of the predicted ground point, where the gate grows
-  with distance (``base_gate_m + gate_per_m * forward_m``: one pixel of the bottom row is
-  centimetres near the pole and half a metre at 20 m).
-
-Either gate needs the region's box area within ``max_area_ratio`` of the track's (either way):
-a speck of noise next to a walker whose body was not segmented this frame is no continuation
-of him, and taking it would move his box and ground point to the speck and lose him the next
-frame (night_walk frame 218). A body half-segmented (legs only, about a third of the area)
-still passes; a fragment so much smaller is left to reunification (``reunite``).
-
-Either gate suffices because each fails somewhere the other holds: the image gate loses a car
-at 15 m/s near the camera (it moves its own length in a few frames, but its ground prediction
-holds), the ground gate loses an insect whose bottom row jumps metres (which should still be
-one track, so its ground speed can condemn it). Pairs are scored ``IoU + image nearness +
-ground nearness`` (each nearness 1 at the prediction, 0 at the gate) and taken best first.
-
-Greedy rather than Hungarian (optimal) assignment: a lamp's frame holds a handful of regions
-and tracks, the gates leave few conflicts, and greedy in plain Python costs a few microseconds
-where scipy's ``linear_sum_assignment`` costs more in its call than the whole frame's matching;
-where two objects cross, the best pair is the prediction that fits best, which is what an
-optimal assignment of these scores would mostly choose too.
+Design: docs/design/tracks.md (Association)
 """
 
 from __future__ import annotations

@@ -1,60 +1,12 @@
 """Cameras looking steeply down: a region's size as its footprint on the ground, and a car's
 pieces joined into one region by it.
 
-The paper's geometry (``detector.features``) measures a region as an upright body standing on
-its box's bottom row: its height is the box's top row seen at the bottom row's distance. That
-holds for cameras looking along the street (the paper's and the lamps', 13-22 degrees down),
-which see a body from the side. A camera looking steeply down sees a car mostly from above: the
-car's length on the ground fills the image rows its height would, so the car measures 2-5 m
-"tall" and fits no Table 1 class; and its paint, windows and roof each match the asphalt
-somewhere, so background subtraction cuts it into pieces (3 a frame on average, up to 7, on
-the car-park development clip) whose outlines change from frame to frame. Neither joining rule
-of ``detector.tracks.reunite`` takes them: the pieces' image velocities differ by about as much
-as the car moves, and their union fits no Table 1 class as an upright body.
+``is_steep`` says which cameras; ``FootprintGeometry`` gives a box's footprint extents and
+middle (m, along and across the camera's heading); ``join_groups`` joins a frame's moving
+regions that one vehicle could have made; ``continue_inside`` lets a piece left over continue
+its track.
 
-**Steep** (``is_steep``): every image row looks down more steeply than
-``atan(tallest vehicle / shortest vehicle)`` (Table 1: 2.0 m over 3.7 m, 28.4 degrees); there a
-vehicle going along the view shows the camera more of its length than of its height, in every
-row. The camera's top row (at the image centre column) is its shallowest. The paper's cameras
-and the lamps' (tilted 13-22 degrees, top rows shallower still) are not steep and nothing here
-runs for them; the car-park clip's camera (50 degrees down, top row 32 degrees) is.
-
-**Footprint** (``FootprintGeometry.extents_m``): a box's bottom corners on the ground and its
-top corners on the plane ``roof_m`` above it (Table 1's tallest vehicle, 2.0 m), through the
-camera model (pinhole, the lens's distortion undone): seen from above, a box's bottom edge is
-where a body meets the ground and its top edge is at most a vehicle's height up. Taking the top
-at the tallest roof gives the smallest footprint a body up to a vehicle's height could have
-made the box from (an upper bound test: could one vehicle have made this?). The footprint's
-extents are along the camera's heading (``forward``) and across it (``right``), m.
-
-**Joining** (``join_groups``): a frame's moving regions (still ones, ghosts, are left out:
-``detector.ghosts``) are joined, nearest pairs first (the gap between their footprints, m),
-while the footprint of the union's box fits within one Table 1 vehicle in any heading: each
-extent at most the diagonal of the largest vehicle (4.6 x 1.8 m: 4.94 m). The union's own box,
-not the union of the parts' footprints: a piece's bottom edge inside the union is no place where
-the body meets the ground. The union is one region (box the boxes' union, contour area the
-parts' sum, the paper's features computed again), so the tracker follows one region where the
-pieces were. A walker or cyclist alone is one region or pieces of one body, and stays so; two
-road users within a car's footprint of each other are joined, which a frame cannot tell from a
-car in pieces (a known limit, only on steep cameras).
-
-**Where a region stands** (``FootprintGeometry.centres_m``): the middle of its footprint, not
-its box's bottom centre (an upright body's feet, the paper's convention): seen from above, a
-car's bottom edge is whichever piece reaches lowest in the image this frame, and it jumps by
-metres as pieces come and go; the middle moves half as much. For an upright walker the middle
-is near his feet anyway (his head's ray meets the roof plane close above them).
-
-**Pieces left over** (``continue_inside``): a region no track takes (a piece much smaller than
-its car's box fails association's area ratio, ``detector.tracks.associate``), lying mostly
-(``ReuniteParams.min_inside_share``) inside the box of a track that no region continues this
-frame, where that track is predicted or was last seen at its typical size, continues it: what
-is left of a car leaving through the frame's edge (the body, cut by the border, is not
-classified) or a frame where only a piece of paint was segmented.
-
-Measured on the car-park clip (``python -m detector``, tracks with a box centre in each car's
-part of the frame): the white car of frames 0-47 made 9 tracks, now 1 (tracked in 26 frames: it
-leaves through the left edge from frame 24); the grey-green car of frames 343-395 11, now 1
-(tracked in 44 frames); the whole clip 30 tracks, now 5.
+Design: docs/design/footprint.md
 """
 
 from __future__ import annotations

@@ -1,48 +1,11 @@
 """A track that moves like a road vehicle is a target, whatever its frames look like.
 
-At night a car going away from a camera shows the camera its dark back and, ahead of it, the
-bright spot its headlights throw on the road. Background subtraction often keeps the spot and
-loses the body (on suburban_night at 02:00 the body differs from the road by about the noise
-threshold while the spot is far brighter), so the region is the spot: 7-9 m wide, and as a
-standing body at its bottom row 2.5-4 m tall. Every frame is then 'classified noise' with its
-size 'outside Table 1', and the car crosses zone after zone unconfirmed (suburban_night at
-02:00, seed 1: two cars going +x left 17 zone entries dark). Yet the spot's track is what
-only a vehicle makes: it moves at the car's speed, straight, for as long as it is in view, at
-a steady size, its bottom row on the road. An insect near the lens (the false alarm the track
-rules are for) does none of that: it jumps metres on the ground between frames, loops and
-changes size as it flutters, so the rules of ``detector.tracks.plausibility`` other than the
-size check reject it first.
+``steady_speed_mps``: a straight-line fit of the track's ground path at a steady 5-20 m/s, not
+towards the camera, at a steady size within a vehicle's bounds; such a track overrides the
+reasons in ``OVERRIDDEN_REASONS`` (and ``VEHICLE_ONLY_REASONS`` above ``vehicle_above_mps``).
+``motion_class`` gives its class. Speeds m/s on the ground, positions and sizes m, times s.
 
-``steady_speed_mps(track, limits)``: the track's ground positions of the last ``window_s`` (at least
-``min_age_s`` of them, ``min_points`` sightings; ``Track.path``) lie on a straight line walked at a
-constant speed: a least-squares fit of forward and right position against time leaves an RMS
-residual under ``max_residual_share`` of the distance from the pole (a pixel row is 0.3 m at 20 m,
-and a spot's fuzzy near edge stalls and jumps a few rows; an insect's ground point jumps metres),
-and the fitted speed is between ``min_speed_mps`` and ``max_speed_mps`` (5-20 m/s: faster than
-joggers and the flashlight spots of walkers, whom the classifier must judge). A straight-line fit, not
-the track's half-second velocities: those follow each stall and jump of the bottom row
-(a car at 10 m/s measured at 4-15 m/s within a second), while the fit over a second does not. The
-estimated width and height (m) must vary less than ``max_size_variation`` (coefficient of
-variation), stay under ``max_width_m`` and ``max_height_m`` (a car with its beam, not a lamp
-switching in the whole view) and have medians of at least ``min_width_m`` and ``min_height_m``
-(Table 1's smallest vehicle less the size tolerance: on the paper's scene replicas the pieces of
-cyclists and cars, 0.3-0.7 m wide, and low specks 0.6-0.9 m tall moving at 3-8 m/s were noise
-tracks this rule made targets, 27 of them, until these bounds and the 5 m/s floor). The fitted velocity must not point at the camera (within
-``approach_deg``): a car coming toward the camera faces its headlamps at it, so the camera sees the
-car itself, and the spot on the road ahead of it is no second road user (on the paper's scene C
-such spots of cars still out of range were five of the noise tracks called target). Such a track
-is a target even when it was rejected as 'size outside Table 1', 'classified noise', 'erratic'
-(``OVERRIDDEN_REASONS``: 'erratic' because the acceleration test differentiates those same jumpy
-velocities; the fit is the stricter test of a steady motion), 'jumping' (a car broken into
-fragments can jump half their small boxes a frame yet keep a car's straight steady path, which
-an insect's jumps never draw) or, faster than ``vehicle_above_mps``
-only (``VEHICLE_ONLY_REASONS``), 'too wide for its heading': a car's spot going away is as wide as
-that, but a spot that wide at a cyclist's speed is a cyclist's lamp's light, not a car (scene C:
-four such tracks at 5-7 m/s). 'too few frames', 'too fast' and 'size unsteady' still reject. Its class
-(``motion_class``): a vehicle above ``vehicle_above_mps`` (faster than walkers and cyclists go in
-town), else its likeliest target class.
-
-Speeds m/s on the ground, positions and sizes m, times s.
+Design: docs/design/tracks.md (A track that moves like a road vehicle)
 """
 
 from __future__ import annotations

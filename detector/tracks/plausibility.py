@@ -1,62 +1,11 @@
 """Could a road user have made this track? If not, it is noise, and this says why.
 
-The paper's section 8 proposes deciding over time; a frame alone cannot tell an insect at
-the infrared emitter from a walker 20 m away (both can have a walker's estimated size),
-but its track can: seen through the camera model an insect near the lens jumps metres on the
-ground from frame to frame, changes size as it flutters and rarely lasts. The rules, each a
-reason (checked in this order, the first that holds is given):
+``reject_reason`` checks the rules in order (too few frames, too fast, erratic, jumping, size
+outside Table 1, size unsteady, too wide for its heading, oscillating in place) and gives the
+first that holds. Speeds are m/s on the ground, sizes m (``detector.features``), frames counted
+at the camera's.
 
-* ``too few frames``: seen in fewer than ``min_frames`` frames (rain streaks, flickers), or its
-  ground velocity not yet known (positions spanning half of ``VELOCITY_WINDOW_S``: 0.27 s at 15
-  frames/s; the rules below need it); but a track whose box already jumped (below) as often as
-  an insect's does is 'jumping' from then on, velocity or not, so the controllers that count a
-  young track's frames (``citysim.control.track_windows``) know it for an insect early;
-* ``too fast``: ground speed above ``max_speed_mps`` (60 km/h, the fastest road user here,
-  plus a margin for the estimate's noise);
-* ``erratic``: the ground velocity changed faster than ``max_accel_mps2`` in at least
-  ``max_accel_violations`` of the last frames (no road user accelerates like that; a single
-  violation can be one bad bottom row);
-* ``jumping``: in at least ``max_box_jumps`` of the last frames (``ACCEL_FRAMES``, 1 s at 15
-  frames/s) the box centre moved more than ``max_box_shift`` of the box's size in one frame
-  (``track.box_shift_share``), not counting a return to where it was the sighting before (a
-  region taken for one frame and left is one jump). Judged from the track's second frame: it
-  is the insect's mark while the acceleration test is not yet judged (the track's first
-  second) and the half-second velocities still smooth its jumps away. A moth 0.15-1.5 m from
-  the lens drifts and loops at 0.5-3 m/s, about its own size (1-2 cm plus blur) every 1/15 s,
-  and its image scales with the distance as its motion does, so near or far its blob moves
-  about its own size per frame (suburban_night at 02:00, seed 1: the insects' target tracks
-  0.4-1.6 per frame, in 3-4 of their first 5-8 frames). A road user moves its own size in a
-  frame only above 15 sizes per second: a car broadside at 25 m/s makes 5.5 car lengths per
-  second (0.37 per frame), a runner crossing 5-6 of his side-on widths (0.4); the road users'
-  target tracks there stay under 0.35, but for the fragments of a car coming past the pole
-  (0.55-0.66, after it was confirmed); the vehicle-motion rule (``detector.tracks.motion``)
-  still takes a jumping track whose path is a car's going away;
-* ``size outside Table 1``: the median estimated width or height over the last frames lies
-  outside every Table 1 class (widened by ``size_tolerance``; a car side on is as wide as it is
-  long);
-* ``size unsteady``: the estimated height varies more than ``max_height_variation``
-  (coefficient of variation over the last frames): a body keeps its height, an insect or a
-  flickering light does not;
-* ``too wide for its heading``: faster than walkers go (``walk_max_mps``) and along the line of
-  sight (within ``head_on_deg`` of it), so the camera sees the road user's front or back; Table 1's
-  road users that go that fast (cyclists, vehicles) show at most 1.8 m of width on at least 1.4 m
-  of height there (``FRONT_ASPECT``: 1.29), and the track's median estimated width / median height
-  is above that, widened by ``size_tolerance`` (the height may be that much under its range:
-  1.29 / 0.65 = 1.98). What is that wide and moves so is the light a cyclist's lamp or a car's
-  headlights throw on the road ahead (3.5-9.5 m wide, 1.6-3.3 m 'tall' as a standing body on the
-  paper's scene C; its frames are often classified target: a car side on is as wide). Judged over
-  the track's life (``note_heading`` counts the frames): too wide in most of the frames it moved
-  so, since a spot's outline breathes around the bound and its speed dips under it for a frame;
-  a track stays the thing it was;
-* ``oscillating in place``: over ``SWAY_FRAMES`` frames the box centre swung across a good
-  share of its width yet ended where it began, while the ground velocity stays under
-  ``still_mps``: a swaying branch or flag. A walker standing still hardly moves at all.
-
-A camera looking steeply down sees bodies from above, where the size rules' upright-body sizes
-fail: ``detector.tracks.steep`` replaces them by the track's footprint (``reject_reason``'s
-``size_reason``).
-
-Speeds are m/s on the ground, sizes m (``detector.features``), frames counted at the camera's.
+Design: docs/design/plausibility.md
 """
 
 from __future__ import annotations

@@ -1,22 +1,10 @@
 """One object in pieces becomes one region again, before it is classified.
 
-Background subtraction often cuts an object: a car's dark windows split its body, a walker's
-coat matches the wall behind. Each piece then has a piece's size and is called noise or the
-wrong class. Two rules join pieces (the paper's section 8 names the problem):
+Two rules join pieces: a region inside a continued track's predicted box, and two tracks'
+regions that touch, move together and fit a Table 1 class together at least as well as apart.
+The union's features are computed again (``detector.features``).
 
-* **inside a track's box**: a region that continues no track but lies mostly
-  (``min_inside_share`` of its box) inside the predicted box of a track that another region
-  of this frame continues is a piece of that object;
-* **moving together**: two regions continuing tracks seen for ``min_frames`` frames or more,
-  whose boxes touch or nearly (gaps under ``max_gap_share`` of the smaller height), whose image
-  velocities agree (within ``max_velocity_share`` of the faster plus ``velocity_slack_px``
-  per frame), and whose union fits a Table 1 class at least as well as each part does
-  (``detector.tracks.plausibility.table1_misfit``, in metres through the camera), are one
-  object; the younger track joins the older.
-
-The union's box is the boxes' union and its contour area the parts' sum; its features are
-computed again (``detector.features``). Pairs are few (a frame holds a handful of regions),
-so the tests run in plain Python over all pairs.
+Design: docs/design/tracks.md (Reunification)
 """
 
 from __future__ import annotations

@@ -1,76 +1,11 @@
 """Cameras looking steeply down: a track's size, class and target decision by its footprint.
 
-The paper's track rules (``detector.tracks.plausibility``) and the classifier's features measure a
-region as an upright body standing on its box's bottom row (``detector.features``). A camera
-looking steeply down (``detector.tracks.footprint.is_steep``) sees bodies from above, where that
-measure fails both ways: a car joined from its pieces (``footprint``) measures 2-3 m wide and 3-5 m
-"tall" as an upright body, outside every Table 1 class (on the car-park development clip the two
-cars' tracks were 'size outside Table 1' or 'size unsteady' in every frame); and a walker or
-cyclist far up the view, whose legs or wheels alone are segmented in half of the frames, measures
-0.4-0.9 m "tall" there, which the classifier calls noise at P 0.99 or more, so the pooled
-P(target) of his track stays under the threshold (the clip's walker: 0.08-0.49 once judged; the
-cyclist: 0.003-0.14; the person wheeling a bicycle: 0.003-0.13). Retraining is no way out: the
-classifier already is one trained for this camera on the spot (its view is shorter than the
-general model's), on upright bodies; it calls the joined cars' regions 'group' (25 on the clip)
-about as often as 'vehicle' (26), and the cars' tracks were 'group' by their summed log-
-probabilities in every frame. For these cameras the track is judged on the ground instead:
+Used by ``TrackSet`` only where ``detector.tracks.footprint.is_steep``: the least footprint
+(``least_sides_m``), its size rule (``size_reason``), jumps against the track's largest box
+(``piece_shift_share``), the class (``footprint_class``) and whole-body frames (``whole_frames``).
+Sizes m on the ground, boxes OpenCV ``(x, y, w, h)`` px.
 
-**Least footprint** (``least_sides_m``): the smallest ground extents a body at most Table 1's
-tallest (2.0 m, ``FootprintParams.roof_m``) could have made the box with, along the camera's
-heading: seen from above a box's bottom row is the body's nearest point, on the ground, and its
-top row its farthest, at most ``roof_m`` up, so its depth is at least from the bottom corners on
-the ground to the top corners on the roof plane (0 where they cross). Across the view: the box's
-width on the ground at its bottom row or on the roof plane at its top row, the smaller (an
-upright body off the view's centre leans outward in the image and widens its box: the clip's
-walker 0.43-0.77 m, a 0.5 m walker 5 m off the centre at 13 m 0.94 m; a strict bound, taking each
-side at whichever height puts it innermost, shrank the clip's cars' widths to 0.2-1.4 m).
-Unlike the joiner's extents (``FootprintGeometry.extents_m``, the hull of the four corners, an upper bound test for joining),
-this holds no roof parallax: the hull of a small box far up the view spans metres between its
-corners on the ground and on the roof plane (the clip's walker: 1.1-1.8 m across), his least
-footprint does not (long side 0.43-0.77 m, 10th-90th percentile). An upright walker's least depth
-is 0: his head's ray meets the roof plane before his feet.
-
-**Size** (``size_reason``): over the last ``SIZE_FRAMES`` frames the median least footprint's long
-and short sides must stay within what some Table 1 class can cover in some heading
-(``FOOTPRINT_MAX_M``: a width x length rectangle turned any way covers at most its diagonal on its
-long side and (width + length) / sqrt 2 on its short side), widened by ``size_tolerance``:
-otherwise 'footprint outside Table 1'. Only upper bounds: the least footprint is a lower bound of
-the body's. It replaces the upright-body rules 'size outside Table 1', 'size unsteady' (the
-height as an upright body of a car whose pieces come and go) and 'too wide for its heading' (an
-upright body's width over height); the motion rules (too few frames, too fast, erratic, jumping,
-oscillating in place) stay.
-
-**Jumps** (``piece_shift_share``): the paper's jump (the box centre moving more than half the box's
-size in one frame: an insect near the lens) measured against the track's largest box of its last
-``SIZE_FRAMES`` frames too, not only this frame's and the last: from above, a body whose legs or
-wheels alone were segmented is a piece moving inside its own outline (the clip's cyclist: boxes of
-6 x 4 px between 30 x 32 px ones, 'jumping' in 21 of his 29 frames, now 6), not a blob jumping by
-its own size. An insect's blob keeps about its own size; its jumps are measured as before. The
-return test (a box back where it was the sighting before) is the paper's.
-
-**Class** (``footprint_class``): 'vehicle' if the footprint fits a vehicle and the least footprint
-reaches Table 1's smallest vehicle, 3.7 x 1.4 m less ``size_tolerance`` (2.4 x 0.91 m), in its long
-and short sides' upper quartiles over the window (a lower bound: a frame where pieces of the car
-were lost shrinks it, so not the median; a single frame, a region wrongly joined, does not
-decide; the clip's cars, pieces only in their first frames, were 'group' there by the median
-until 6-10 frames in): no lone
-walker or cyclist covers that, and a moving region that large is what the joiner already takes for
-one vehicle (``footprint``; the clip's cars: 90th percentiles 3.0-3.4 x 2.4 m, medians
-2.1-2.8 x 1.7-2.0 m, the camera being an estimate);
-else the classifier's likeliest (``Track.log_sums``) among the classes the footprint fits. Its
-upright-body features still tell a walker from a group or a cyclist when his whole body is
-segmented. Two walkers abreast across the view's diagonal can cover a vehicle's least footprint: a
-known limit (the track is still a target; only its class is wrong).
-
-**Target** (``whole_frames``): a track the rules above find plausible is a target when its pooled
-P(target) reaches the threshold (as the paper's), or when at least ``MIN_WHOLE_FRAMES`` of its
-pooling window's frames were classified target on their own: the frames where the whole body was
-segmented, the only ones the upright-body features measure right from above. Noise seldom looks
-like a whole road user even for a frame and then also has to keep a road user's footprint and
-motion; still regions (ghosts) follow no track (``detector.ghosts``).
-
-Not for the paper's or the lamps' cameras (13-22 degrees down): ``TrackSet`` uses this only where
-``is_steep``. Sizes m on the ground, boxes OpenCV ``(x, y, w, h)`` px (``footprint`` conventions).
+Design: docs/design/steep-cameras.md
 """
 
 from __future__ import annotations

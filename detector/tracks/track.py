@@ -1,24 +1,11 @@
 """One object followed across frames: where it is on the ground, how fast, how big, what it is.
 
-A ``Track`` keeps short windows of its history (positions, sizes, per-frame class
-probabilities) so every figure it reports costs O(window) per frame, not O(life).
+A ``Track`` keeps short windows of its history (positions in the camera's ground frame, m;
+sizes; per-frame class probabilities) so every figure costs O(window) per frame. Velocities
+(m/s) are the difference of the medians of the window's halves; P(target) pools the last
+frames (``POOLINGS``, default ``mean_log``); the class takes the track's whole life.
 
-Ground positions are in the camera's ground frame (``detector.tracks.ground``: forward and
-right of the pole foot, m). Velocities come from the positions of the last ``VELOCITY_WINDOW_S``
-(a single frame's bottom row jitters by a pixel or more: 0.5 m at 20 m, 7 m/s at 15 frames/s;
-over half a second the same jitter is 1 m/s), as the difference of the medians of the
-window's older and newer halves, so a bottom row that jumps for a few frames is no burst of
-speed (``_median_halves_velocity``). Image velocities are px per frame of the box's
-bottom centre, for predicting the next box.
-
-Pooling the per-frame class probabilities (``POOLINGS``) into P(target): ``mean_log`` (the
-default) averages the log-probabilities of the last ``POOL_FRAMES`` frames and renormalises:
-the frames as independent evidence about one object, tempered by their number so a long track
-is not certain; ``mean`` averages the probabilities; ``last`` is the newest frame alone. The
-choice was measured on the paper's scene replicas (``experiments.paper``; figures in docs/design/detector-measurements.md).
-Which target class a track is takes its whole life (``log_sums``: the summed log-probabilities
-of every frame): a walker whose silhouette looks like a cyclist's now and then stays a
-pedestrian, while P(target) answers within a second.
+Design: docs/design/tracks.md (What a track measures)
 """
 
 from __future__ import annotations

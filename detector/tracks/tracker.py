@@ -1,40 +1,12 @@
 """A camera's tracks: each frame's regions associated, fragments joined, classes pooled, physics checked.
 
 ``TrackSet`` is what ``detector.detector.Detector`` calls per frame, in two steps around the
-classifier:
+classifier: ``prepare(boxes, areas, rows, still)`` (ground points, association, joining) returns
+the regions to classify; ``update(prepared, probabilities)`` continues or starts every track,
+decides its target and returns one ``TrackView`` per region. Track ids are ints from 1, never
+reused.
 
-1. ``prepare(boxes, areas, rows, still)``: ground points of the regions (``ground``), their
-   association with the tracks (``associate``) and the joining of fragments (``reunite``);
-   returns the regions to classify (joined ones with recomputed features). A camera looking
-   steeply down (``footprint.is_steep``) first joins a car's pieces by their footprint on the
-   ground, places regions at their footprint's middle and lets a piece left over continue the
-   track it lies in (``footprint``); regions where nothing moved (``still``, the detector's
-   ghosts: ``detector.ghosts``) join nothing and follow no track (their view's ``track_id`` is
-   None, never a target), listed last;
-2. ``update(prepared, probabilities)``: every track continued or started, its pooled class
-   and p_target (``track.pool_probabilities``), its plausibility (``plausibility``) and its
-   target decision: a target track is plausible and its pooled p_target reaches the
-   threshold, or it moves like a road vehicle (``motion``: straight, steady, 5-20 m/s, not
-   coming toward the camera, a steady size), which outweighs frames of noise or of no Table 1
-   size (a car's headlight spot going away from the camera) and, at a vehicle's speed, a width
-   no road user shows moving that way. A camera looking steeply down judges the track on the
-   ground instead (``steep``): its footprint for the upright-body size rules and its class, and
-   its whole-body frames for a pooled p_target under the threshold. Returns one ``TrackView``
-   per region.
-
-Tracks unseen for more than ``max_missed_frames`` frames end, except a target that had
-stopped (ground speed under the plausibility limits' ``still_mps``): background subtraction
-absorbs a still object in a few seconds (MOG2 takes a new colour as background once it holds
-a tenth of its weight: about 3.5 s at the default history), so such a track is kept for
-``still_hold_s`` and the person who stood and walks on keeps the id. Not a track whose box reached
-the frame's bottom edge within that second (``EXIT_MARGIN_PX``): its ground point stalls because
-its feet left the view under the camera, not because it stopped, and a track held there was
-taken over by whatever next moved at the edge (on suburban_night at 02:00 insects, lit by the
-emitter right below it, four times in 300 s on two seeds, each one a target from its first frame
-with the walker's history, and lamps lit for them). With ``keep_ended`` they are
-kept in ``ended`` (for a video's tracks.csv; a simulation leaves it off so memory stays
-bounded). Track ids are ints from 1, never reused. The last ``confirm_n`` target decisions of
-each track are kept as bits for k-of-n confirmation (``is_confirmed``).
+Design: docs/design/tracks.md
 """
 
 from __future__ import annotations

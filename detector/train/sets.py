@@ -1,35 +1,15 @@
 """Synthetic training features for the dimensional classifier (paper section 5.3).
 
-Each sample is one object seen by one random camera: the 3D model of
-``detector.train.shapes`` (sizes uniform in Table 1, any heading, any gait
-phase) stands at a random ground point in view, is projected with
-``CameraModel.project``, rasterised (union of its convex parts, swept over the
-exposure for motion blur), cleaned with the segmenter's morphology, and turned
-into a bounding box and a Green's-theorem contour area
-(``detector.train.regions``). The features come from
-``detector.features.region_features``: the very code the detector runs.
+Each sample is one object (``detector.train.shapes``, sizes in Table 1) seen by one random
+camera, projected, rasterised, cleaned with the segmenter's morphology and measured with
+``detector.features.region_features``, the very code the detector runs; ``noise_ratio`` noise
+rows per target row (``detector.train.samplers`` draws each kind).
 
-What each kind of object is, and how it is drawn, lives in
-``detector.train.samplers``. Noise is of two sorts, mixed by
-``TrainingConfig.noise_weights``: the paper's feature vectors out of the
-Table 1 ranges (too small, too flat, too tall and thin, too large; drawn
-directly, as in the paper), and things a night camera really sees move,
-rendered through the same projection so their features are realistic
-(animals, light spots on the road, insects near the lens, foliage). There are
-``noise_ratio`` (3) noise rows per target row: at night noise outnumbers
-targets (1.9-2.6 times in the paper's scenes A-C, Table 2); 3 holds the
-false-positive rate under 5 % while misses stay near 1.5 %.
+The camera stands at the origin looking along +x, so the "forward distance" of the features is
+the world x of the ground point (m). Determinism: everything is drawn from the one
+``numpy.random.Generator`` passed in; the same seed gives the same arrays, bit for bit.
 
-Cameras: pole height 2-10 m, tilt 0-80 deg, intrinsics of the paper's three
-Table 2 cameras, keeping only those that see the ground at least
-``min_view_range_m`` (25 m, the paper's detection-range requirement) far
-(the ranges are ``detector.classes``' ``GENERAL_*``, which the runtime reads
-too); or a given list of cameras (a model specialised to one installation).
-The camera stands at the origin looking along +x, so the "forward distance"
-of the features is the world x of the ground point.
-
-Determinism: everything is drawn from the one ``numpy.random.Generator``
-passed in; the same seed gives the same arrays, bit for bit.
+Design: docs/design/modules.md (Synthetic training data)
 """
 
 from __future__ import annotations

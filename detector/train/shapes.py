@@ -6,7 +6,7 @@ what the simulated camera shows.
 
 Conventions:
 
-* World frame of DESIGN.md: x along the street, y across it, z up, metres;
+* World frame of docs/design/architecture.md: x along the street, y across it, z up, metres;
   the ground is z = 0 and every model stands on it.
 * ``x_m, y_m`` is the centre of the model's ground footprint; ``heading_rad``
   is its direction of motion, counter-clockwise from +x.

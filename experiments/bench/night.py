@@ -1,27 +1,13 @@
 """Whole-night bench: every controller of suburban_night, full fidelity and fast mode, on 2 workers.
 
-``bench_night(duration_s)`` times ``citysim.sim.compare.run_comparison`` at full fidelity (the
-traffic recorded once and replayed to every controller, as ``citysim run`` does) over the first
-``duration_s`` simulated seconds of the night and prints the wall and CPU time beside the figure
-measured before the traffic was replayed: a whole night (22:00-06:00, 28,800 s) of every
-controller took about 1.8 hours on 2 cores. A run shorter than the night also prints the whole
-night scaled from it; the night starts with its busiest hour, so that is an upper bound.
-
-``bench_night_fast(sample_s)`` times fast mode (``--fidelity fast``, the shipped sensor model)
-over one sample of each hour of the night: hour k of the night is the scenario started at clock
-hour 22 + k with every class's hourly profile from its k-th value on (the scripted test agents in
-the first hour only), ``sample_s`` long from an empty street; each sample is scaled to its hour
-and the hours summed. The street starts empty, so busy hours are a little under-counted. Before:
-every controller took 249 CPU-s per 600 simulated seconds in fast mode.
-``bench_night_fast_whole()`` runs that whole night in fast mode as one run and measures it.
-``bench_night_full_hours(sample_s)`` samples the hours the same way at full fidelity (300 s each
-by default: a lower estimate of the night, since walkers take about 5 minutes to fill the empty
-street, beside ``bench_night``'s upper one).
-
-CPU seconds count this process and every worker process (they are reaped when a comparison
-ends); on a machine shared with other jobs they, not the wall time, are the figure to go by.
+``bench_night(duration_s)`` times full fidelity over the night's first ``duration_s`` s;
+``bench_night_fast(sample_s)`` and ``bench_night_full_hours(sample_s)`` sample each hour of the
+night and sum; ``bench_night_fast_whole()`` runs the whole night in fast mode. Wall and CPU
+seconds (this process and every worker).
 
 ``python -m experiments.bench --night`` runs the whole night at full fidelity (long); ``make bench`` samples.
+
+Design: docs/design/modules.md (The whole-night bench)
 """
 
 from __future__ import annotations

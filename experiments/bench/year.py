@@ -1,11 +1,10 @@
 """Year bench: ``citysim year`` of suburban_night in fast mode, every controller, on 2 workers.
 
 Times the response table and the annual sums (``citysim.year``) exactly as the command runs them,
-beside the figures before: 446 CPU-s for always_on, oracle, pir and schedule when every controller
-stepped its own world; 149 CPU-s (77 s wall) for those four with the traffic replayed. Camera
-controllers add their sensing (fast mode: the shipped sensor model's draws): every controller
-took 947 CPU-s (about 8 min wall on 2 cores) before fast mode's per-step and per-frame savings and
-the sensor model that no longer draws beams as false alarms.
+wall and CPU seconds, beside a reference figure (149 CPU-s, 77 s wall, for always_on, oracle,
+pir and schedule).
+
+Design: docs/design/modules.md (The year bench)
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The real detector on rendered e-scooters: scenarios/suburban_night.yaml with e-scooters only.
 
-Modelled on tests/citysim/test_detection_on_render.py. Prints the per-frame figures (pytest -s
+Modelled on tests/citysim/render/test_detection_on_render.py. Prints the per-frame figures (pytest -s
 shows them) and holds them to the issue's bar: in most frames where an e-scooter is fully visible
 within 25 m of the lamp camera, the detector calls it a target (p_target >= 0.5).
 

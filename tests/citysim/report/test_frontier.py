@@ -65,3 +65,66 @@ def test_a_one_axis_sweep_joins_each_controllers_settings_in_axis_order_averaged
     assert [t.get_text() for t in ax.texts if t.get_text() in {"5", "20", "60"}] == ["5", "20", "60"]
     assert ax.get_legend().get_title().get_text() == "labels: lamps.luminaire.hold_s, mean over seeds"
     plt.close(fig)
+
+
+#: Eleven controllers as a night's comparison has them: most crowd the top-right corner.
+ELEVEN = {
+    "always_on": (1.0, 0.0), "oracle": (1.0, 0.42), "schedule": (0.55, 0.25), "pir": (0.93, 0.38),
+    "threshold_5": (0.97, 0.36), "threshold_05": (0.975, 0.35), "detector": (0.96, 0.37),
+    "detector_confirmed": (0.965, 0.365), "detector_network": (0.985, 0.39), "detector_located": (0.98, 0.40),
+    "fusion": (0.99, 0.41),
+}
+
+
+def _eleven() -> dict:
+    return {name: {"controller": name, "lit_on_entry_rate": x, "savings_vs_always_on": y,
+                   "lit_on_entry_interval_95": [x - 0.02, min(1.0, x + 0.01)]}
+            for name, (x, y) in ELEVEN.items()}  # fmt: skip
+
+
+def _label_boxes(fig) -> dict:
+    from matplotlib.text import Text
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    (ax,) = fig.axes
+    return {t.get_text(): Text.get_window_extent(t, renderer) for t in ax.texts if t.get_text() in ELEVEN}
+
+
+def test_eleven_controllers_labels_do_not_overprint_each_other_or_the_legend():
+    fig = frontier_figure(_eleven(), n_objects=300)
+    boxes = _label_boxes(fig)
+    assert set(boxes) == set(ELEVEN)  # every controller is named once
+    names = sorted(boxes)
+    overlaps = [(a, b) for i, a in enumerate(names) for b in names[i + 1:] if boxes[a].overlaps(boxes[b])]
+    assert overlaps == []
+    legend = fig.axes[0].get_legend().get_window_extent(fig.canvas.get_renderer())
+    assert [n for n, box in boxes.items() if box.overlaps(legend)] == []
+    frame = fig.axes[0].get_window_extent(fig.canvas.get_renderer())
+    assert all(frame.x0 <= b.x0 and b.x1 <= frame.x1 and frame.y0 <= b.y0 and b.y1 <= frame.y1 for b in boxes.values())
+    plt.close(fig)
+
+
+def test_the_fixed_offset_labels_would_overprint_on_the_same_summary():
+    # the check above can fail: the same eleven names at one fixed offset from their points collide
+    fig, ax = plt.subplots(figsize=(7.0, 5.0))
+    ax.set_xlim(0.5, 1.02)
+    ax.set_ylim(-0.02, 0.5)
+    for name, (x, y) in ELEVEN.items():
+        ax.annotate(name, (x, y), textcoords="offset points", xytext=(5, 4), fontsize=7)
+    boxes = _label_boxes(fig)
+    names = sorted(boxes)
+    assert any(boxes[a].overlaps(boxes[b]) for i, a in enumerate(names) for b in names[i + 1:])
+    plt.close(fig)
+
+
+def test_always_on_and_the_oracle_get_no_interval_bar():
+    from matplotlib.collections import LineCollection
+
+    fig = frontier_figure(_eleven(), n_objects=300)
+    (ax,) = fig.axes
+    bars = [np.asarray(seg) for c in ax.collections if isinstance(c, LineCollection) for seg in c.get_segments()]
+    ys = sorted(round(float(seg[0][1]), 3) for seg in bars)
+    assert len(bars) == len(ELEVEN) - 2
+    assert 0.0 not in ys and 0.42 not in ys  # always_on's and the oracle's savings rows carry none
+    plt.close(fig)

@@ -184,7 +184,7 @@ def test_best_settings_respects_unlit_crossings(tmp_path):
 
     table = SweepTable.load(folder)
     best = {b["goal"]: b for b in best_settings(table.ok, table.axes)}
-    safest = best["highest savings, no unlit crossing"]
+    safest = best["highest savings, no never-full crossing"]
     # savings peak at tilt 80 whatever the height; heights above 8 m have unlit crossings
     assert safest["setting"]["lamps.camera.tilt_deg"] == "80.0"
     assert float(safest["setting"]["lamps.camera.height_m"]) <= 8
@@ -213,6 +213,6 @@ def test_best_settings_falls_back_to_fewest_unlit_crossings():
     ]  # fmt: skip
     best = best_settings(rows, ["lamps.camera.tilt_deg"])[0]
     # the worst seed decides: 40 deg has at most 1 unlit crossing, 20 and 60 deg have more
-    assert best["goal"] == "highest savings, fewest unlit crossings (1; none has 0)"
+    assert best["goal"] == "highest savings, fewest never-full crossings (1; none has 0)"
     assert best["setting"] == {"lamps.camera.tilt_deg": "40"}
     assert best["savings"] == pytest.approx(0.55) and best["seeds"] == 2
