@@ -74,7 +74,50 @@ def _rows(result: dict) -> list[list[str]]:
     return rows
 
 
-MONEY_HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "below-full s / year"]
+MONEY_HEAD = ["controller", "capex", "opex / year", "saved / year", "payback", "NPV", "CO2 avoided"]
+#: How to read each money column, one sentence each (report.html prints them under the money table).
+MONEY_HOWTO = (
+    ("capex", "what fitting every pole of the street with the controller's hardware costs once "
+     "(hardware plus installation per pole; always-on needs none)"),
+    ("opex / year", "the hardware's yearly upkeep over all poles"),
+    ("saved / year", "the first year's net saving against always-on: the energy saved at the first "
+     "year's price minus the upkeep (negative: the upkeep costs more than the light it saves)"),
+    ("payback", "years until the net savings (the price changing yearly as set) add up to the capex; "
+     "shorter is better, and a payback longer than the hardware's lifetime means it never pays for itself"),
+    ("NPV", "net present value over the hardware's lifetime: every year's net saving discounted at the "
+     "discount rate, minus the capex; above 0 the investment pays, and the larger the better"),
+    ("CO2 avoided", "kg CO2 not emitted over the lifetime: the energy saved a year x the grid factor x "
+     "the lifetime years"),
+)
+
+
+def money_rows(result: dict) -> list[list[str]]:
+    """One row per controller of the money figures (``citysim.year.money``); [] for a year.json without them."""
+    cur = result["currency"]
+    rows = []
+    for label, f in result["controllers"].items():
+        if "capex" not in f:
+            return []
+        payback = f["payback_years"]
+        rows.append([label, fmt_quantity(f["capex"], cur), fmt_quantity(f["opex_per_year"], cur),
+                     fmt_quantity(f["money_saved_per_year"], cur),
+                     "never" if payback is None else f"{payback:.1f} y", fmt_quantity(f["npv"], cur),
+                     fmt_quantity(f["co2_avoided_kg_over_lifetime"], "kg")])  # fmt: skip
+    return rows
+
+
+def money_facts(result: dict) -> str:
+    """One sentence: the prices, lifetime and discount rate the money figures assume."""
+    m = result.get("money")
+    if not m:
+        return ""
+    return (f"Money for {m['poles']} poles at {m['price_per_kwh']:g} {result['currency']}/kWh in the first year, "
+            f"changing {100 * m['price_change_per_year']:+g} % a year, {m['kg_co2_per_kwh']:g} kg CO2/kWh, "
+            f"{m['lifetime_years']} years of hardware life, discounted at {100 * m['discount_rate']:g} % a year "
+            "(the scenario's costs section).")
+
+
+HEAD = ["controller", "energy / year", "saving", "cost / year", "CO2 / year", "AECI", "lit on entry", "below-full s / year"]
 
 
 def lit_with_interval(figures: dict) -> str:
