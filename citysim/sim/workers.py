@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import signal
 import threading
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
@@ -27,9 +28,18 @@ from contextlib import contextmanager
 PARENT_CHECK_S = 0.5
 
 
+class WorkerLost(RuntimeError):
+    """A worker process ended in the middle of its task (killed, or out of memory); the message
+    names what it was running."""
+
+
 def exit_with_parent(parent_pid: int, stop=None, check_s: float = PARENT_CHECK_S) -> None:
     """Pool initializer: end this worker (exit code 1) once ``parent_pid`` is no longer its parent
-    or the ``stop`` event (a ``multiprocessing`` Event) is set."""
+    or the ``stop`` event (a ``multiprocessing`` Event) is set.
+
+    Ctrl-C reaches every process of the terminal's group: a worker ignores it (it would print a
+    traceback of its own) and leaves the stopping to its parent, which sets ``stop``."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     stop = stop if stop is not None else threading.Event()  # a local one that nobody sets
 
     def watch() -> None:
@@ -57,3 +67,22 @@ def spawn_pool(max_workers: int) -> Iterator[ProcessPoolExecutor]:
         pool.shutdown(wait=True, cancel_futures=True)
         raise
     pool.shutdown(wait=True)
+
+
+def worker_exits(pool: ProcessPoolExecutor) -> dict[int, int | None]:
+    """The pool's worker processes by pid with their exit codes (None: still running; -N: ended
+    by signal N), read from the executor's own table of them."""
+    processes = getattr(pool, "_processes", None) or {}
+    return {pid: process.exitcode for pid, process in dict(processes).items()}
+
+
+def describe_exit(code: int | None) -> str:
+    """'killed by SIGKILL', 'exit code 1', 'ended' (unknown) for a worker's exit code."""
+    if code is None:
+        return "ended"
+    if code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit code {code}"
