@@ -40,7 +40,7 @@ from citysim.sweep.fidelity import check_points, check_report, sensor_models, wr
 from citysim.sweep.results import ResultsFile, flatten_summary
 from citysim.sweep.spec import ResolvedSweep, SweepError, SweepPoint, load_sweep
 
-__all__ = ["PointResult", "SweepError", "load_sweep", "run_point", "run_sweep"]
+__all__ = ["PointResult", "SweepError", "kept_points", "load_sweep", "run_point", "run_sweep"]
 
 #: How long to wait for a scheduler given by address before giving up (s).
 SCHEDULER_TIMEOUT_S = 20.0
@@ -252,6 +252,17 @@ def run_sweep(
             counts["check"] = {"points": len(checks), "cells": report["cells"], "cells_pass": report["cells_pass"],
                                "file": write_check(out_dir, report)}  # fmt: skip
     return {**counts, "results": out_dir / "results.csv", "sweep_json": out_dir / "sweep.json"}
+
+
+def kept_points(sweep_file: str | Path, out_dir: str | Path) -> tuple[int, int]:
+    """(points of the sweep finished in ``out_dir``, points of the sweep): what a resumed run skips."""
+    resolved = load_sweep(sweep_file)
+    points = resolved.points()
+    path = Path(out_dir) / "results.csv"
+    if not path.exists():
+        return 0, len(points)
+    finished = ResultsFile(path, resolved.axis_names).finished_points(resolved.controller_labels)
+    return len({p.point_id for p in points} & set(finished)), len(points)
 
 
 def _tasks(runnable, fidelity: str, full_checks: int, cache_dir, progress: bool) -> list[tuple]:
