@@ -20,6 +20,7 @@ import multiprocessing as mp
 import os
 import signal
 import threading
+import time
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
@@ -35,16 +36,25 @@ class WorkerLost(RuntimeError):
 
 def exit_with_parent(parent_pid: int, stop=None, check_s: float = PARENT_CHECK_S) -> None:
     """Pool initializer: end this worker (exit code 1) once ``parent_pid`` is no longer its parent
-    or the ``stop`` event (a ``multiprocessing`` Event) is set.
+    or ``stop`` is set: a shared flag (``multiprocessing`` RawValue, non-zero to stop) or an
+    object with ``is_set()``.
 
-    Ctrl-C reaches every process of the terminal's group: a worker ignores it (it would print a
-    traceback of its own) and leaves the stopping to its parent, which sets ``stop``."""
+    The flag is read, never waited on: a ``multiprocessing.Event`` that a killed worker was waiting
+    on makes the parent's ``set()`` wait forever for it to wake (seen: a run stopped by SIGTERM,
+    sent to its whole process group, hung in ``Event.set``). Ctrl-C reaches every process of the
+    terminal's group: a worker ignores it (it would print a traceback of its own) and leaves the
+    stopping to its parent."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    stop = stop if stop is not None else threading.Event()  # a local one that nobody sets
+    if stop is None:
+        stopped = lambda: False  # noqa: E731
+    elif hasattr(stop, "is_set"):
+        stopped = stop.is_set
+    else:
+        stopped = lambda: bool(stop.value)  # noqa: E731
 
     def watch() -> None:
-        while os.getppid() == parent_pid and not stop.wait(check_s):
-            pass
+        while os.getppid() == parent_pid and not stopped():
+            time.sleep(check_s)
         os._exit(1)  # no clean-up to run: the results have nobody to go to
 
     threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
@@ -55,13 +65,13 @@ def spawn_pool(max_workers: int) -> Iterator[ProcessPoolExecutor]:
     """A pool of fresh interpreters (spawn: no forked OpenCV or pymunk state) that end with this
     process, and at once when the block is left by an exception (see the module docstring)."""
     context = mp.get_context("spawn")
-    stop = context.Event()
+    stop = context.RawValue("b", 0)  # a flag in shared memory: setting it never waits on anyone
     pool = ProcessPoolExecutor(max_workers=max_workers, mp_context=context,
                                initializer=exit_with_parent, initargs=(os.getpid(), stop))  # fmt: skip
     try:
         yield pool
     except BaseException:
-        stop.set()
+        stop.value = 1
         # the workers are gone within ``PARENT_CHECK_S``: waiting for that (not for their tasks)
         # keeps what they use, such as a progress queue's manager, alive until they are
         pool.shutdown(wait=True, cancel_futures=True)
