@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {exc or 'a worker process ended mid-run'}", file=sys.stderr)
             return FAULT_EXIT
         except OSError as exc:
-            line = no_room_line(exc, args)
+            line = no_room_line(exc, args, existed)
             if line is None:
                 raise
             print(line, file=sys.stderr)

@@ -41,12 +41,14 @@ def interrupted_line(args, existed: bool) -> str:
     return "interrupted: nothing written"
 
 
-def no_room_line(exc: OSError, args) -> str | None:
-    """The one line for a write that found the disk full (None for another OSError)."""
+def no_room_line(exc: OSError, args, existed: bool) -> str | None:
+    """The one line for a write that found the disk full or a file-size limit (None for another
+    OSError); ``existed`` as for ``interrupted_line``."""
     if exc.errno not in NO_ROOM:
         return None
-    where = exc.filename or getattr(args, "out", None) or "the output"
-    left = f"{args.out} left as it was" if getattr(args, "out", None) is not None else "nothing written"
+    out = getattr(args, "out", None)
+    where = exc.filename or out or "the output"
+    left = f"{out} left as it was" if out is not None and existed else "nothing written"
     return f"error: no room to write {where} ({exc.strerror}); {left}; free some space and run the same command again"
 
 

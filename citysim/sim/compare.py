@@ -191,7 +191,7 @@ def _lost_message(tasks, started: dict[int, int], exits: dict[int, int | None], 
     pid = started.get(task)
     how = describe_exit(exits.get(pid)) if pid is not None else "ended"
     return (f"the worker process running {'controller ' if tasks[task] else ''}{names}"
-            f"{f' (pid {pid})' if pid is not None else ''} {how} mid-run; nothing was written; "
+            f"{f' (pid {pid})' if pid is not None else ''} ended mid-run ({how}); nothing was written; "
             "run the same command again")
 
 
