@@ -60,13 +60,26 @@ def exit_with_parent(parent_pid: int, stop=None, check_s: float = PARENT_CHECK_S
     threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
 
 
+class _QuietPool(ProcessPoolExecutor):
+    """Starts its workers with Ctrl-C (SIGINT) blocked: a worker inherits the signal mask of the
+    process that forked it, so a Ctrl-C during its second of interpreter start-up (before its
+    initializer ignores SIGINT) stays pending and harmless instead of printing a traceback."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            return super().submit(fn, *args, **kwargs)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+
+
 @contextmanager
 def spawn_pool(max_workers: int) -> Iterator[ProcessPoolExecutor]:
     """A pool of fresh interpreters (spawn: no forked OpenCV or pymunk state) that end with this
     process, and at once when the block is left by an exception (see the module docstring)."""
     context = mp.get_context("spawn")
     stop = context.RawValue("b", 0)  # a flag in shared memory: setting it never waits on anyone
-    pool = ProcessPoolExecutor(max_workers=max_workers, mp_context=context,
+    pool = _QuietPool(max_workers=max_workers, mp_context=context,
                                initializer=exit_with_parent, initargs=(os.getpid(), stop))  # fmt: skip
     try:
         yield pool
