@@ -84,8 +84,11 @@ class Interrupted(SystemExit):
     process with that code and no traceback. ``signum``: the signal."""
 
     def __init__(self, signum: int) -> None:
-        super().__init__(128 + signum)
-        self.signum = signum
+        # args hold the signal, not the exit code: simpy re-raises a process's exception rebuilt
+        # from its args (``type(e)(*e.args)``), and Interrupted(130) would exit with 258, seen as 2
+        super().__init__(int(signum))
+        self.signum = int(signum)
+        self.code = 128 + self.signum
 
 
 #: the first stop signal that arrived within ``exit_on_terminate`` / ``stop_on_signals`` (its
