@@ -184,15 +184,18 @@ def _drain(q, bar, started: dict[int, int], timeout_s: float | None) -> None:
 
 def _lost_message(tasks, started: dict[int, int], exits: dict[int, int | None], task: int) -> str:
     """One line: which task's worker died and how; ``task`` the one whose future broke first."""
-    killed = [t for t, pid in started.items() if exits.get(pid) is not None and exits[pid] < 0
-              and exits[pid] != -signal.SIGTERM]  # SIGTERM: the pool's own clean-up of the others
-    task = killed[0] if killed else task
+    # SIGTERM is the pool's own clean-up of the other workers once one died
+    killed = [pid for pid, code in exits.items() if code is not None and code < 0 and code != -signal.SIGTERM]
+    pid = killed[0] if killed else started.get(task)
+    running = [t for t, p in started.items() if p == pid]
+    if pid is not None and not running:
+        return (f"a worker process (pid {pid}) ended before it took a task ({describe_exit(exits.get(pid))}); "
+                "nothing was written; run the same command again")
+    task = running[-1] if running else task
     names = ", ".join(s.display_name for s in tasks[task]) or "the traffic recorder"
-    pid = started.get(task)
-    how = describe_exit(exits.get(pid)) if pid is not None else "ended"
     return (f"the worker process running {'controller ' if tasks[task] else ''}{names}"
-            f"{f' (pid {pid})' if pid is not None else ''} ended mid-run ({how}); nothing was written; "
-            "run the same command again")
+            f"{f' (pid {pid})' if pid is not None else ''} ended mid-run ({describe_exit(exits.get(pid))}); "
+            "nothing was written; run the same command again")
 
 
 def run_groups(specs: Sequence[ControllerSpec], fidelity: str, workers: int, share_frames: bool) -> list[list[ControllerSpec]]:
