@@ -60,17 +60,41 @@ def exit_with_parent(parent_pid: int, stop=None, check_s: float = PARENT_CHECK_S
     threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
 
 
+@contextmanager
+def sigint_blocked() -> Iterator[None]:
+    """Block Ctrl-C (SIGINT) in this thread for the block: processes and threads started within
+    inherit the blocked mask and never see it (this process still does, in its main thread, once
+    the block ends). For worker processes whose parent does the stopping."""
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+
+
+@contextmanager
+def sigint_ignored_by_children() -> Iterator[None]:
+    """Processes started within the block, and theirs, ignore Ctrl-C (SIGINT) for good: the
+    ignored disposition survives fork and exec, from whichever thread starts them (a Dask
+    cluster's event loop). A Ctrl-C meanwhile is held, not lost: SIGINT is blocked in this
+    thread too, and a blocked signal stays pending even while ignored; it is handled as the
+    block ends."""
+    with sigint_blocked():
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, previous)
+
+
 class _QuietPool(ProcessPoolExecutor):
     """Starts its workers with Ctrl-C (SIGINT) blocked: a worker inherits the signal mask of the
     process that forked it, so a Ctrl-C during its second of interpreter start-up (before its
     initializer ignores SIGINT) stays pending and harmless instead of printing a traceback."""
 
     def submit(self, fn, /, *args, **kwargs):
-        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
+        with sigint_blocked():
             return super().submit(fn, *args, **kwargs)
-        finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
 
 
 @contextmanager

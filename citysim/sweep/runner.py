@@ -132,14 +132,26 @@ class _Client:
 
 def connect(scheduler: str | None, workers: int | None) -> _Client:
     """Client(scheduler) for a real cluster, else a LocalCluster of ``workers`` 1-thread processes."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler is not None:
         try:
             return _Client(Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s"))
         except (OSError, TimeoutError) as exc:
             raise SweepError(f"scheduler {scheduler!r}: cannot connect ({exc})") from None
+    from citysim.sim.workers import sigint_ignored_by_children
+
     n = workers if workers is not None else max(1, os.cpu_count() or 1)
+    # Ctrl-C reaches the whole terminal group: the cluster's processes ignore it (else each prints
+    # a traceback), so only this process stops, and closes the cluster
+    with sigint_ignored_by_children():
+        return _local(n)
+
+
+def _local(n: int) -> _Client:
+    """A LocalCluster of ``n`` single-threaded worker processes on loopback, and its client."""
+    from distributed import Client, LocalCluster
+
     cluster = LocalCluster(
         n_workers=n,
         threads_per_worker=1,
