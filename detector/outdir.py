@@ -7,9 +7,14 @@ into a hidden staging folder beside the destination and moves them into place on
 whole job succeeded; on any error the staging folder, and any parent folder it had to create,
 is removed and the destination is left as it was.
 
-A job stopped from outside cleans up too: ``exit_on_terminate`` (the command-line entry points
-call it) turns SIGTERM, what ``kill`` and job schedulers send, into the same exit Ctrl-C takes,
-so the staging folder goes. A job killed outright (SIGKILL, a power cut) cannot clean up; its
+``staged_folder`` builds a whole output folder (plots and report included) under its own name in
+a hidden staging folder and renames it into place at the end, an earlier folder of the same name
+staying intact until then: the folder is complete or absent.
+
+A job stopped from outside cleans up too: ``stop_on_signals`` (``citysim``) and
+``exit_on_terminate`` (SIGTERM alone) turn Ctrl-C and SIGTERM, what ``kill``, ``timeout`` and
+job schedulers send, into ``Interrupted`` (a ``SystemExit`` with code 130 or 143), so ``finally``
+blocks run and the staging folder goes; a repeated signal during that clean-up is ignored. A job killed outright (SIGKILL, a power cut) cannot clean up; its
 staging folder names its process, and the next job writing beside it removes it once that
 process is gone.
 """

@@ -8,8 +8,8 @@ half an hour):
   thread and exits as soon as the parent is gone (the kernel re-parents an orphan, so its
   parent pid changes);
 * the command is stopped in an orderly way (an error, Ctrl-C, SIGTERM turned into an exit by
-  ``detector.outdir.exit_on_terminate``): leaving the ``spawn_pool`` block by an exception sets
-  the pool's stop event, which the same thread watches, and waits only for the workers to exit
+  ``detector.outdir.stop_on_signals``): leaving the ``spawn_pool`` block by an exception sets
+  the pool's stop flag, which the same thread reads, and waits only for the workers to exit
   (half a second), not for the running nights to finish (what ``ProcessPoolExecutor``'s own
   exit does), so the command's clean-up runs at once.
 """
