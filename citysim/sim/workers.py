@@ -45,6 +45,11 @@ def exit_with_parent(parent_pid: int, stop=None, check_s: float = PARENT_CHECK_S
     terminal's group: a worker ignores it (it would print a traceback of its own) and leaves the
     stopping to its parent."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # tqdm's default lock is a multiprocessing semaphore, made by the first bar (even a disabled one);
+    # a worker that leaves by os._exit never releases it and the resource tracker warns of a leak
+    from tqdm import tqdm
+
+    tqdm.set_lock(threading.RLock())
     if stop is None:
         stopped = lambda: False  # noqa: E731
     elif hasattr(stop, "is_set"):

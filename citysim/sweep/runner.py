@@ -75,8 +75,15 @@ def run_point(
     fidelity: str = "full", sensor_model=None,
 ) -> PointResult:
     """The Dask task: every controller of ``scenario`` on one point. Never raises: failures are rows."""
+    import threading
+
+    from tqdm import tqdm
+
     from citysim.sim.compare import run_comparison
 
+    # no bar is shown here; tqdm's default lock, a multiprocessing semaphore, would be reported
+    # leaked by the resource tracker when the cluster's processes are ended by a stopped sweep
+    tqdm.set_lock(threading.RLock())
     t0 = time.perf_counter()
     files: dict[str, str] = {}
     try:

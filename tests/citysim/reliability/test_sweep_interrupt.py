@@ -29,8 +29,8 @@ def test_a_stopped_sweep_keeps_its_points_and_says_how_to_resume(tmp_path):
     finally:
         stop(proc)
     assert proc.returncode == 130
-    said = [line for line in lines(err) if "resource_tracker" not in line and "warnings.warn" not in line]
-    assert len(said) == 1 and "Traceback" not in err, err
+    said = lines(err)  # no worker traceback, no resource-tracker warning of leaked semaphores
+    assert len(said) == 1, err
     kept = int(said[0].split("interrupted: ")[1].split(" of ")[0])
     assert said[0] == f"interrupted: {kept} of 24 points kept in {out}; run the same command again to resume"
     assert 1 <= kept < 24
