@@ -14,10 +14,13 @@ DOCS_STAMP := $(VENV)/.installed-docs
 install: $(STAMP)
 
 $(STAMP): pyproject.toml
+	@echo "installing citysim and what it needs into $(VENV) (once, or after pyproject.toml changes; about a minute on a fresh clone)"
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
+	@echo "  pip: installing the simulator's packages (numpy, opencv, pymunk, numba, ...)"
 	$(PY) -m pip install --quiet -e .
 	touch $(STAMP)
+	@echo "  installed"
 
 $(TEST_STAMP): $(STAMP)
 	$(PY) -m pip install --quiet -e '.[test]'
@@ -31,6 +34,7 @@ $(DOCS_STAMP): $(STAMP)
 # schedule and detector_located, its first minute again at full fidelity as the check, and the year's figures.
 # Prints each table; ends with the paths of results/demo/night/report.html and .../year/report.html.
 demo: $(STAMP)
+	@echo "demo: starting Python (the first run also compiles the renderer's and detector's kernels, cached after)"
 	$(PY) -m experiments.demo
 
 # The same with every controller of the scenario over the whole night.

@@ -7,9 +7,14 @@ into a hidden staging folder beside the destination and moves them into place on
 whole job succeeded; on any error the staging folder, and any parent folder it had to create,
 is removed and the destination is left as it was.
 
-A job stopped from outside cleans up too: ``exit_on_terminate`` (the command-line entry points
-call it) turns SIGTERM, what ``kill`` and job schedulers send, into the same exit Ctrl-C takes,
-so the staging folder goes. A job killed outright (SIGKILL, a power cut) cannot clean up; its
+``staged_folder`` builds a whole output folder (plots and report included) under its own name in
+a hidden staging folder and renames it into place at the end, an earlier folder of the same name
+staying intact until then: the folder is complete or absent.
+
+A job stopped from outside cleans up too: ``stop_on_signals`` (``citysim``) and
+``exit_on_terminate`` (SIGTERM alone) turn Ctrl-C and SIGTERM, what ``kill``, ``timeout`` and
+job schedulers send, into ``Interrupted`` (a ``SystemExit`` with code 130 or 143), so ``finally``
+blocks run and the staging folder goes; a repeated signal during that clean-up is ignored. A job killed outright (SIGKILL, a power cut) cannot clean up; its
 staging folder names its process, and the next job writing beside it removes it once that
 process is gone.
 """
@@ -46,7 +51,7 @@ def check_output_dir(out_dir: str | Path, kind: str, names: Sequence[str], arg: 
         if foreign:
             shown = ", ".join(foreign[:4]) + (f" and {len(foreign) - 4} more" if len(foreign) > 4 else "")
             raise OutputDirError(f"{arg}: {out} holds files that are not from a {kind} ({shown}); {valid}")
-    _check_writable(out, arg)
+    check_writable(out, arg)
 
 
 def check_output_file(path: str | Path, arg: str = "--out") -> None:
@@ -54,10 +59,10 @@ def check_output_file(path: str | Path, arg: str = "--out") -> None:
     path = Path(path)
     if path.is_dir():
         raise OutputDirError(f"{arg}: {path} is a folder; valid: a file path, e.g. {path / 'model.joblib'}")
-    _check_writable(path.parent, arg)
+    check_writable(path.parent, arg)
 
 
-def _check_writable(out: Path, arg: str) -> None:
+def check_writable(out: Path, arg: str) -> None:
     """Can a folder be made in ``out`` (if it exists) or in its nearest existing ancestor?"""
     place = out.absolute()
     while not place.exists():
@@ -74,44 +79,86 @@ def _check_writable(out: Path, arg: str) -> None:
 
 #: exit status of a process ended by SIGTERM (128 + the signal's number), as shells report it
 TERMINATED_EXIT = 128 + signal.SIGTERM
+#: exit status of a process ended by Ctrl-C (SIGINT)
+INTERRUPTED_EXIT = 128 + signal.SIGINT
 
 
-#: set by the SIGTERM handler: its exception can be lost (below), the flag cannot
-_terminated = threading.Event()
+class Interrupted(SystemExit):
+    """The job was stopped by SIGINT (Ctrl-C) or SIGTERM: a ``SystemExit`` whose code is 128 + the
+    signal's number (130, 143), so ``except Exception`` lets it through and, uncaught, it ends the
+    process with that code and no traceback. ``signum``: the signal."""
+
+    def __init__(self, signum: int) -> None:
+        # args hold the signal, not the exit code: simpy re-raises a process's exception rebuilt
+        # from its args (``type(e)(*e.args)``), and Interrupted(130) would exit with 258, seen as 2
+        super().__init__(int(signum))
+        self.signum = int(signum)
+        self.code = 128 + self.signum
+
+
+#: the first stop signal that arrived within ``exit_on_terminate`` / ``stop_on_signals`` (its
+#: exception can be lost, below; this record cannot)
+_stopped_by: list[int] = []
 
 
 def _raise_exit(signum, frame) -> None:
-    _terminated.set()
-    raise SystemExit(TERMINATED_EXIT)
+    if _stopped_by:  # already stopping (a second Ctrl-C, or the signal sent to the whole group):
+        return  # the clean-up of the first one runs undisturbed
+    _stopped_by.append(signum)
+    raise Interrupted(signum)
 
 
 def raise_if_terminated() -> None:
-    """Raise ``SystemExit(143)`` if SIGTERM arrived within ``exit_on_terminate``.
+    """Raise ``Interrupted`` (exit 143 or 130) if SIGTERM or SIGINT arrived within
+    ``exit_on_terminate`` / ``stop_on_signals``.
 
     The handler's own exception is lost when the signal lands inside a callback from C: Python
     prints it ("Exception ignored from callback") and goes on (seen: pymunk freeing a body
     through cffi during the world's step, and the run then finished and wrote its output). So
     the simulation loops call this once per simulated second, and ``staged_output`` before it
     moves anything into place."""
-    if _terminated.is_set():
-        raise SystemExit(TERMINATED_EXIT)
+    if _stopped_by:
+        raise Interrupted(_stopped_by[0])
+
+
+def stop_requested() -> int | None:
+    """The stop signal received within ``exit_on_terminate`` / ``stop_on_signals``, else None."""
+    return _stopped_by[0] if _stopped_by else None
+
+
+@contextmanager
+def _stopping_on(signals: Sequence[int]) -> Iterator[None]:
+    main = threading.current_thread() is threading.main_thread()
+    defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
+    mine = [s for s in signals if main and signal.getsignal(s) is defaults[s]]
+    _stopped_by.clear()
+    for signum in mine:
+        signal.signal(signum, _raise_exit)
+    try:
+        yield
+    finally:
+        for signum in mine:
+            signal.signal(signum, defaults[signum])
+        _stopped_by.clear()
 
 
 @contextmanager
 def exit_on_terminate() -> Iterator[None]:
-    """Within this block SIGTERM ends the process as an exception (``SystemExit(143)``), so
-    ``finally`` blocks and ``staged_output`` clean up; the default action comes back after it.
-    Only from the main thread and only over the default action: a program embedding the job
-    keeps its own handler."""
-    install = threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
-    if install:
-        _terminated.clear()
-        signal.signal(signal.SIGTERM, _raise_exit)
-    try:
+    """Within this block SIGTERM ends the process as an exception (``Interrupted``, a
+    ``SystemExit(143)``), so ``finally`` blocks and ``staged_output`` clean up; the default action
+    comes back after it. Only from the main thread and only over the default action: a program
+    embedding the job keeps its own handler. A second SIGTERM while the first one's clean-up runs
+    is ignored."""
+    with _stopping_on([signal.SIGTERM]):
         yield
-    finally:
-        if install:
-            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+@contextmanager
+def stop_on_signals() -> Iterator[None]:
+    """``exit_on_terminate`` for SIGINT (Ctrl-C, exit 130) and SIGTERM (exit 143) alike: the
+    first one raises ``Interrupted``, the next ones are ignored while it cleans up."""
+    with _stopping_on([signal.SIGINT, signal.SIGTERM]):
+        yield
 
 
 def _stage_prefix(out: Path) -> str:
@@ -154,11 +201,7 @@ def staged_output(out_dir: str | Path) -> Iterator[Path]:
         raise_if_terminated()
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
-        for folder in made:  # the parents this job created, if still empty
-            try:
-                folder.rmdir()
-            except OSError:
-                break
+        _remove_made(made)
         raise
     out.mkdir(parents=True, exist_ok=True)
     for item in stage.iterdir():
@@ -167,3 +210,61 @@ def staged_output(out_dir: str | Path) -> Iterator[Path]:
             shutil.rmtree(target)
         item.replace(target)
     shutil.rmtree(stage, ignore_errors=True)
+
+
+def _move_aside_and_in(stage: Path, out: Path, aside: Path) -> None:
+    """Put the finished folder ``stage`` at ``out``: an earlier ``out`` is renamed to ``aside``
+    first (it stays whole until then), then ``stage`` is renamed into place. Signals wait
+    meanwhile, so the two renames happen both or neither."""
+    blocked = {signal.SIGINT, signal.SIGTERM}
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
+    try:
+        if out.is_dir() and not out.is_symlink():
+            out.rename(aside)
+        stage.rename(out)
+    except OSError:  # out a mount point or a symlink: its files are replaced one by one
+        if aside.exists() and not out.exists():
+            aside.rename(out)
+        out.mkdir(parents=True, exist_ok=True)
+        for item in stage.iterdir():
+            target = out / item.name
+            if target.is_dir() and not target.is_symlink():
+                shutil.rmtree(target)
+            item.replace(target)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+
+
+@contextmanager
+def staged_folder(out_dir: str | Path) -> Iterator[Path]:
+    """Yield an empty folder named like ``out_dir`` inside a hidden staging folder beside it; on
+    success it replaces ``out_dir`` whole (an earlier ``out_dir`` stays intact until then), on any
+    error or stop signal it goes and ``out_dir`` is left as it was.
+
+    Unlike ``staged_output`` (which moves files into a folder that may hold others), the result is
+    the complete folder: use it for an output folder that ``check_output_dir`` accepted."""
+    out = Path(out_dir)
+    made = [p for p in (out.parent, *out.parent.parents) if not p.exists()]  # deepest first
+    out.parent.mkdir(parents=True, exist_ok=True)
+    remove_orphan_stages(out)
+    root = Path(tempfile.mkdtemp(prefix=f"{_stage_prefix(out)}{os.getpid()}-", dir=out.parent))
+    stage = root / out.name
+    try:
+        stage.mkdir()
+        yield stage
+        raise_if_terminated()
+        _move_aside_and_in(stage, out, root / f"{out.name}.replaced")
+    except BaseException:
+        shutil.rmtree(root, ignore_errors=True)
+        _remove_made(made)
+        raise
+    shutil.rmtree(root, ignore_errors=True)
+
+
+def _remove_made(made: Sequence[Path]) -> None:
+    """Remove the parent folders a job created (deepest first), if still empty."""
+    for folder in made:
+        try:
+            folder.rmdir()
+        except OSError:
+            break

@@ -120,6 +120,8 @@ def main(argv: list[str] | None = None) -> int:
     which = ["--controllers", args.controllers] if args.controllers != "all" else []
     who = "every controller" if args.controllers == "all" else args.controllers
     t0 = time.perf_counter()
+    print(f"demo: writing {out}/night and {out}/year; the bars count simulated seconds (summed over the "
+          "controllers) and estimate the time left once warmed up (workers started, kernels compiled)", flush=True)
     # the check and the year need nothing of the night: they start now, the check at the night's
     # priority (a serial chain that would otherwise run after the night), the year on the CPU time
     # the two leave idle (see idle_cores)

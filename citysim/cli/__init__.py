@@ -10,11 +10,15 @@ from __future__ import annotations
 
 import argparse
 import sys
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 
 from citysim.cli import calibrate, city, detect, import_, plot, render, run, sweep, year
 from citysim.cli.common import controller_list, user_errors
+from citysim.cli.stops import FAULT_EXIT, interrupted_line, no_room_line, writer_lock
+from citysim.sim.workers import WorkerLost
 from detector.cliargs import USAGE_EXIT, Parser
-from detector.outdir import exit_on_terminate
+from detector.outdir import Interrupted, stop_on_signals
 
 #: The commands in the order `citysim --help` lists them.
 COMMANDS = (run, render, year, city, sweep, calibrate, detect, plot, import_)
@@ -31,15 +35,31 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run `citysim` with ``argv`` (default: the process's arguments); the exit code."""
+    """Run `citysim` with ``argv`` (default: the process's arguments); the exit code (see
+    ``citysim.cli.stops`` for each one's meaning)."""
     args = build_parser().parse_args(argv)
-    # killed from outside (SIGTERM), a job still removes its half-written output
-    with exit_on_terminate():
+    out = getattr(args, "out", None)
+    existed = out is not None and Path(out).exists()
+    # Ctrl-C and SIGTERM end the job as an exception: workers stop, half-written output goes
+    with stop_on_signals():
         try:
-            return args.func(args)
+            with writer_lock(args):
+                return args.func(args)
+        except Interrupted as stop:
+            print(f"\n{interrupted_line(args, existed)}", file=sys.stderr)
+            return stop.code
         except user_errors() as exc:
             print(f"error: {exc}", file=sys.stderr)
             return USAGE_EXIT
+        except (WorkerLost, BrokenProcessPool) as exc:
+            print(f"error: {exc or 'a worker process ended mid-run'}", file=sys.stderr)
+            return FAULT_EXIT
+        except OSError as exc:
+            line = no_room_line(exc, args, existed)
+            if line is None:
+                raise
+            print(line, file=sys.stderr)
+            return FAULT_EXIT
 
 
 __all__ = ["build_parser", "controller_list", "main"]

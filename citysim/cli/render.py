@@ -6,7 +6,7 @@ from pathlib import Path
 
 from citysim.cli.common import MAX_DURATION_S
 from detector.cliargs import number
-from detector.outdir import check_output_dir
+from detector.outdir import check_output_dir, staged_folder
 
 #: What a render folder holds; an earlier one may be replaced.
 RENDER_OUTPUTS = ("camera.mp4", "truth.csv", "topdown.png")
@@ -18,8 +18,9 @@ def cmd_render(args) -> int:
 
     scenario = load_scenario(args.scenario)
     check_output_dir(args.out, "citysim render", RENDER_OUTPUTS)
-    stats = render_clip(scenario, args.lamp, args.duration, args.out, start_s=args.start, detect=args.detect,
-                        lamps_full=args.lamps_full, progress=not args.no_progress, camera_side=args.camera)
+    with staged_folder(args.out) as stage:  # complete or absent: built aside, renamed into place
+        stats = render_clip(scenario, args.lamp, args.duration, stage, start_s=args.start, detect=args.detect,
+                            lamps_full=args.lamps_full, progress=not args.no_progress, camera_side=args.camera)
     print(f"{stats['frames']} frames from t = {args.start:g} s, {stats['truth_rows']} truth boxes"
           + (f", target detected in {stats['frames_with_target_detected']} frames" if args.detect else ""))
     print(f"results written to {args.out}/: camera.mp4, truth.csv, topdown.png")
@@ -46,6 +47,6 @@ def add(sub) -> None:
     rd.add_argument("--lamps-full", action="store_true", help="render with every lamp at full level "
                                                                 "(default: at the luminaire's dim_level)")
     rd.add_argument("--no-progress", action="store_true", help="no progress bar")
-    rd.set_defaults(func=cmd_render)
+    rd.set_defaults(func=cmd_render, out_lock=True)
 
 

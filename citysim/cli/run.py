@@ -6,7 +6,7 @@ from pathlib import Path
 
 from citysim.cli.common import MAX_DURATION_S, add_fidelity, controller_list
 from detector.cliargs import number
-from detector.outdir import check_output_dir
+from detector.outdir import check_output_dir, staged_folder
 
 #: What a run folder holds ("plots/" a folder); an earlier one may be replaced, a folder holding
 #: anything else is refused.
@@ -28,34 +28,41 @@ def cmd_run(args) -> int:
     names = controller_names(args.controllers)
     check_output_dir(args.out, "citysim run", RUN_OUTPUTS)
     workers = args.workers or default_workers()
-    summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=args.out, workers=workers,
-                             scenario_file=str(args.scenario), fidelity=args.fidelity, cache_dir=args.cache)
     from citysim.report.run_plots import plot_run
     from citysim.report.table import comparison_table
     from citysim.report.topdown import plot_coverage_map
     from citysim.world.street import build_street
 
-    # the run folder's data is written; its pictures are drawn here, outside the simulation (the
-    # coverage map from the scenario's street, the rest from the run folder alone)
-    plot_coverage_map(build_street(scenario), Path(args.out) / "plots" / "coverage.png")
-    plot_run(args.out)
+    out = Path(args.out)
+    # the whole folder, plots and report included, is built aside and renamed into place at the end:
+    # an interrupted run leaves an earlier run folder as it was, or none
+    with staged_folder(out) as stage:
+        summary = run_comparison(scenario, names, progress=not args.no_progress, out_dir=stage, workers=workers,
+                                 scenario_file=str(args.scenario), fidelity=args.fidelity, cache_dir=args.cache)
+        # the run folder's data is written; its pictures are drawn here, outside the simulation (the
+        # coverage map from the scenario's street, the rest from the run folder alone)
+        plot_coverage_map(build_street(scenario), stage / "plots" / "coverage.png")
+        plot_run(stage)
+        where = run_outputs(stage, shown_as=out)
     print(comparison_table(summary))
-    print("\n" + "\n".join(run_outputs(Path(args.out))))
+    print("\n" + "\n".join(where))
     return 0
 
 
-def run_outputs(out: Path) -> list[str]:
-    """Write report.html beside the plots the run drew; the lines saying where everything is."""
+def run_outputs(folder: Path, shown_as: Path | None = None) -> list[str]:
+    """Write report.html beside the plots the run drew in ``folder``; the lines saying where
+    everything is, under the name ``shown_as`` (default ``folder``; the staged folder's final place)."""
     from citysim.report.html import write_report
     from citysim.report.run_plots import RUN_PLOTS
 
-    plots = [out / "plots" / name for name in RUN_PLOTS if (out / "plots" / name).exists()]
+    out = shown_as if shown_as is not None else folder
+    plots = [folder / "plots" / name for name in RUN_PLOTS if (folder / "plots" / name).exists()]
     where = [("figures per controller", f"{out / 'summary.json'}"),
              ("per object and lamp", f"{out / 'objects.csv'}, {out / 'lamps.csv'}")]  # fmt: skip
     if plots:
-        report = write_report(out, plots=plots)  # the plots run_comparison drew, not drawn again
+        write_report(folder, plots=plots)  # the plots run_comparison drew, not drawn again
         where += [(f"plots ({len(plots)} PNGs)", f"{out / 'plots'}/"),
-                  ("report (open in a browser)", str(report))]  # fmt: skip
+                  ("report (open in a browser)", str(out / "report.html"))]  # fmt: skip
     width = max(len(label) for label, _ in where)
     return [f"results written to {out}/:"] + [f"  {label:<{width}}  {path}" for label, path in where]
 
@@ -77,6 +84,6 @@ def add(sub) -> None:
                    help="parallel processes, one controller each (default: 2, or 1 on a one-core machine)")
     add_fidelity(r, "full")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
-    r.set_defaults(func=cmd_run)
+    r.set_defaults(func=cmd_run, out_lock=True)
 
 

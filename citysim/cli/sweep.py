@@ -30,6 +30,16 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def interrupted_sweep(args) -> str:
+    """The line a stopped sweep prints: the points kept (written as each finished) and how to resume."""
+    from citysim.sweep.runner import kept_points
+
+    if not (args.out / "sweep.json").exists():
+        return "interrupted: nothing written"
+    kept, total = kept_points(args.sweep, args.out)
+    return f"interrupted: {kept} of {total} points kept in {args.out}; run the same command again to resume"
+
+
 def add(sub) -> None:
     s = sub.add_parser("sweep", help="run a parameter sweep on Dask",
                        description="Run every point of a sweep file; a folder of the same sweep resumes.")
@@ -43,4 +53,4 @@ def add(sub) -> None:
     s.add_argument("--full-checks", type=number(int, ge=0), default=2,
                    help="in fast mode, this many points (evenly spread) are re-run in full fidelity and compared")
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
-    s.set_defaults(func=cmd_sweep)
+    s.set_defaults(func=cmd_sweep, out_lock=True, on_interrupt=interrupted_sweep)

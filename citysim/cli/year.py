@@ -9,8 +9,8 @@ import sys
 from pathlib import Path
 
 from citysim.cli.common import controller_list
-from detector.cliargs import USAGE_EXIT, number
-from detector.outdir import check_output_dir
+from detector.cliargs import USAGE_EXIT, nearest_names, number
+from detector.outdir import check_output_dir, staged_folder
 
 #: What a year folder holds; an earlier one may be replaced.
 YEAR_OUTPUTS = ("year.json", "plots/", "report.html")
@@ -23,6 +23,9 @@ def cmd_year(args) -> int:
     from citysim.year.plan import prepare_year, table_runs, year_spec
     from citysim.year.run import run_year
 
+    if args.timezone is not None and (bad := timezone_error(args.timezone)):
+        print(f"error: --timezone: {bad}", file=sys.stderr)
+        return USAGE_EXIT
     scenario = load_scenario(args.scenario)
     year = year_spec(scenario, str(args.scenario), latitude_deg=args.lat, longitude_deg=args.lon,
                      timezone=args.timezone, year=args.year, sample_s=args.sample_s)
@@ -40,18 +43,34 @@ def cmd_year(args) -> int:
     print(f"{scenario.name} at {year.latitude_deg:g}, {year.longitude_deg:g} ({year.timezone}), {year.year}: "
           f"{len(plan.spans)} nights, {sum(p.hours for p, _, _ in plan.pieces):,.0f} dark hours; "
           f"table: {runs} hour-runs at {fidelity} fidelity, {sim_s:,.0f} simulated s per controller")
-    result = run_year(plan, args.out, names, workers=args.workers or default_workers(), fidelity=fidelity,
-                      check_nights=args.check_nights, progress=not args.no_progress,
-                      scenario_file=str(args.scenario))
     from citysim.report.html import write_report
     from citysim.report.year_section import plot_year, year_table
 
-    plots = plot_year(args.out)
-    report = write_report(args.out, plots=plots)
+    with staged_folder(args.out) as stage:  # complete or absent: built aside, renamed into place
+        result = run_year(plan, stage, names, workers=args.workers or default_workers(), fidelity=fidelity,
+                          check_nights=args.check_nights, progress=not args.no_progress,
+                          scenario_file=str(args.scenario))
+        plots = plot_year(stage)
+        write_report(stage, plots=plots)
     print(year_table(result))
     print(f"\nresults written to {args.out}/:\n  annual figures and the table  {args.out / 'year.json'}\n"
-          f"  monthly energy plot          {plots[0]}\n  report (open in a browser)   {report}")
+          f"  monthly energy plot          {args.out / 'plots' / plots[0].name}\n"
+          f"  report (open in a browser)   {args.out / 'report.html'}")
     return 0
+
+
+def timezone_error(name: str) -> str | None:
+    """What is wrong with the IANA time zone ``name`` (with the nearest valid names), or None."""
+    import zoneinfo
+
+    try:
+        zoneinfo.ZoneInfo(name)
+        return None
+    except (zoneinfo.ZoneInfoNotFoundError, ValueError):
+        pass
+    near = nearest_names(name, sorted(zoneinfo.available_timezones()), n=3)
+    hint = f"did you mean {' or '.join(near)}?" if near else "valid: an IANA name such as Europe/Berlin or America/New_York"
+    return f"unknown IANA time zone {name!r}; {hint}"
 
 
 def add(sub) -> None:
@@ -83,4 +102,4 @@ def add(sub) -> None:
     y.add_argument("--workers", type=number(int, ge=1), default=None,
                    help="parallel processes, one table run each (default: 2, or 1 on a one-core machine)")
     y.add_argument("--no-progress", action="store_true", help="no progress bar")
-    y.set_defaults(func=cmd_year)
+    y.set_defaults(func=cmd_year, out_lock=True)

@@ -21,11 +21,11 @@ import multiprocessing as mp
 import os
 import queue
 import shutil
+import signal
 import time
 from collections.abc import Sequence
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
-
-from tqdm import tqdm
 
 from citysim.config.scenario import ControllerSpec, Scenario
 from citysim.control.registry import CONTROLLERS
@@ -33,13 +33,14 @@ from citysim.metrics.crossings import OBJECTS_CSV_HEADER
 from citysim.metrics.lamp_log import LAMPS_CSV_HEADER
 from citysim.sim.calibration import sensor_model_for
 from citysim.sim.loop import check_controllers, check_fidelity, controller_spec
+from citysim.sim.progress import SimulatedTimeBar
 from citysim.sim.replay import record_traffic
 from citysim.sim.together import part_path, run_together
-from citysim.sim.workers import spawn_pool
+from citysim.sim.workers import WorkerLost, describe_exit, spawn_pool, worker_exits
 from citysim.world.approaches import approaches
 from citysim.world.coverage import camera_coverage
 from citysim.world.street import build_street
-from detector.outdir import staged_output
+from detector.outdir import raise_if_terminated, staged_folder
 
 #: Every comparison holds these (savings are against always-on, and against the oracle's bound,
 #: measured on the same night), first, in this order.
@@ -110,8 +111,10 @@ class _Batched:
 
 def _worker(args):
     """One task of a pool: the traffic recorder (no specs), or a group of controllers
-    (``run_together``, one controller alone the usual group); returns the summaries by display name."""
-    scenario, specs, part_dir, progress_queue, traffic, fidelity, sensor_model = args
+    (``run_together``, one controller alone the usual group); returns the summaries by display name.
+    Tells the parent first which process runs it (``("started", task, pid)``)."""
+    task, scenario, specs, part_dir, progress_queue, traffic, fidelity, sensor_model = args
+    progress_queue.put(("started", task, os.getpid()))
     report = _Batched(progress_queue)
     traffic = None if traffic is None else Path(traffic)
     if specs:
@@ -137,26 +140,62 @@ def _run_here(scenario, groups, parts, traffic, fidelity, sensor_model, bar) -> 
 
 def _run_in_pool(scenario, groups, parts, traffic, fidelity, sensor_model, bar, workers: int) -> dict[str, dict]:
     """The comparison's tasks on ``workers`` processes, the traffic recorder first: the controllers
-    replay its chunks as it writes them."""
+    replay its chunks as it writes them. A worker that dies mid-task (SIGKILL, out of memory)
+    stops the comparison with ``WorkerLost`` naming its controllers."""
     results: dict[str, dict] = {}
     traffic_arg = None if traffic is None else str(traffic)
     tasks = ([] if traffic is None else [[]]) + list(groups)  # [] is the recorder
+    started: dict[int, int] = {}  # task -> pid of the worker running it
+    exits: dict[int, int | None] = {}
     with mp.Manager() as manager:
         q = manager.Queue()
         with spawn_pool(workers) as pool:
-            pending = {pool.submit(_worker, (scenario, group, str(parts), q, traffic_arg, fidelity, sensor_model))
-                       for group in tasks}  # fmt: skip
+            pending = {pool.submit(_worker, (i, scenario, group, str(parts), q, traffic_arg, fidelity, sensor_model)): i
+                       for i, group in enumerate(tasks)}  # fmt: skip
             while pending:
-                try:
-                    bar.update(q.get(timeout=0.2))
-                except queue.Empty:
-                    pass
+                exits.update(worker_exits(pool))
+                _drain(q, bar, started, timeout_s=0.2)
                 for f in [f for f in pending if f.done()]:
-                    pending.discard(f)
-                    results.update(f.result())
-            while not q.empty():
-                bar.update(q.get())
+                    task = pending.pop(f)
+                    try:
+                        results.update(f.result())
+                    except BrokenProcessPool:
+                        raise_if_terminated()  # the workers went because the user stopped the run
+                        exits.update(worker_exits(pool))
+                        raise WorkerLost(_lost_message(tasks, started, exits, task)) from None
+            _drain(q, bar, started, timeout_s=None)
     return results
+
+
+def _drain(q, bar, started: dict[int, int], timeout_s: float | None) -> None:
+    """Take the progress queue's messages: sim seconds for the bar, ``("started", task, pid)``
+    notes; wait up to ``timeout_s`` for the first (None: take only what is there)."""
+    while True:
+        try:
+            item = q.get(timeout=timeout_s) if timeout_s is not None else q.get_nowait()
+        except queue.Empty:
+            return
+        timeout_s = None
+        if isinstance(item, tuple):
+            started[item[1]] = item[2]
+        else:
+            bar.update(item)
+
+
+def _lost_message(tasks, started: dict[int, int], exits: dict[int, int | None], task: int) -> str:
+    """One line: which task's worker died and how; ``task`` the one whose future broke first."""
+    # SIGTERM is the pool's own clean-up of the other workers once one died
+    killed = [pid for pid, code in exits.items() if code is not None and code < 0 and code != -signal.SIGTERM]
+    pid = killed[0] if killed else started.get(task)
+    running = [t for t, p in started.items() if p == pid]
+    if pid is not None and not running:
+        return (f"a worker process (pid {pid}) ended before it took a task ({describe_exit(exits.get(pid))}); "
+                "nothing was written; run the same command again")
+    task = running[-1] if running else task
+    names = ", ".join(s.display_name for s in tasks[task]) or "the traffic recorder"
+    return (f"the worker process running {'controller ' if tasks[task] else ''}{names}"
+            f"{f' (pid {pid})' if pid is not None else ''} ended mid-run ({describe_exit(exits.get(pid))}); "
+            "nothing was written; run the same command again")
 
 
 def run_groups(specs: Sequence[ControllerSpec], fidelity: str, workers: int, share_frames: bool) -> list[list[ControllerSpec]]:
@@ -233,16 +272,14 @@ def run_comparison(
                "duration_s": scenario.duration_s, "fidelity": fidelity, "lamps": None,
                "coverage": camera_coverage(build_street(scenario)).as_dict(),
                "approaches": approaches(scenario).as_dict(), "controllers": {}}
-    with staged_output(out_dir) if out_dir is not None else _scratch() as stage:
+    with staged_folder(out_dir) if out_dir is not None else _scratch() as stage:
         parts = stage / ".parts"
         traffic = stage / ".traffic" if replay_traffic else None
         total_s = scenario.duration_s * (len(specs) + (traffic is not None))
-        bar = tqdm(total=total_s, unit="sim s", desc=f"{scenario.name}: {len(specs)} controllers", disable=not progress,
-                   bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
         groups = run_groups(specs, fidelity, workers, share_frames)
         tasks = (scenario, groups, parts, traffic, fidelity, sensor_model)
-        results = _run_here(*tasks, bar) if workers == 1 else _run_in_pool(*tasks, bar, workers)
-        bar.close()
+        with SimulatedTimeBar(total_s, f"{scenario.name}: {len(specs)} controllers", disable=not progress) as bar:
+            results = _run_here(*tasks, bar) if workers == 1 else _run_in_pool(*tasks, bar, workers)
         results = with_savings_vs_oracle({spec.display_name: results[spec.display_name] for spec in specs})
         summary["controllers"] = results
         summary["lamps"] = scenario.lamps.count or len(scenario.lamps.positions_x_m)

@@ -40,7 +40,7 @@ from citysim.sweep.fidelity import check_points, check_report, sensor_models, wr
 from citysim.sweep.results import ResultsFile, flatten_summary
 from citysim.sweep.spec import ResolvedSweep, SweepError, SweepPoint, load_sweep
 
-__all__ = ["PointResult", "SweepError", "load_sweep", "run_point", "run_sweep"]
+__all__ = ["PointResult", "SweepError", "kept_points", "load_sweep", "run_point", "run_sweep"]
 
 #: How long to wait for a scheduler given by address before giving up (s).
 SCHEDULER_TIMEOUT_S = 20.0
@@ -75,8 +75,15 @@ def run_point(
     fidelity: str = "full", sensor_model=None,
 ) -> PointResult:
     """The Dask task: every controller of ``scenario`` on one point. Never raises: failures are rows."""
+    import threading
+
+    from tqdm import tqdm
+
     from citysim.sim.compare import run_comparison
 
+    # no bar is shown here; tqdm's default lock, a multiprocessing semaphore, would be reported
+    # leaked by the resource tracker when the cluster's processes are ended by a stopped sweep
+    tqdm.set_lock(threading.RLock())
     t0 = time.perf_counter()
     files: dict[str, str] = {}
     try:
@@ -132,14 +139,26 @@ class _Client:
 
 def connect(scheduler: str | None, workers: int | None) -> _Client:
     """Client(scheduler) for a real cluster, else a LocalCluster of ``workers`` 1-thread processes."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler is not None:
         try:
             return _Client(Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s"))
         except (OSError, TimeoutError) as exc:
             raise SweepError(f"scheduler {scheduler!r}: cannot connect ({exc})") from None
+    from citysim.sim.workers import sigint_ignored_by_children
+
     n = workers if workers is not None else max(1, os.cpu_count() or 1)
+    # Ctrl-C reaches the whole terminal group: the cluster's processes ignore it (else each prints
+    # a traceback), so only this process stops, and closes the cluster
+    with sigint_ignored_by_children():
+        return _local(n)
+
+
+def _local(n: int) -> _Client:
+    """A LocalCluster of ``n`` single-threaded worker processes on loopback, and its client."""
+    from distributed import Client, LocalCluster
+
     cluster = LocalCluster(
         n_workers=n,
         threads_per_worker=1,
@@ -252,6 +271,17 @@ def run_sweep(
             counts["check"] = {"points": len(checks), "cells": report["cells"], "cells_pass": report["cells_pass"],
                                "file": write_check(out_dir, report)}  # fmt: skip
     return {**counts, "results": out_dir / "results.csv", "sweep_json": out_dir / "sweep.json"}
+
+
+def kept_points(sweep_file: str | Path, out_dir: str | Path) -> tuple[int, int]:
+    """(points of the sweep finished in ``out_dir``, points of the sweep): what a resumed run skips."""
+    resolved = load_sweep(sweep_file)
+    points = resolved.points()
+    path = Path(out_dir) / "results.csv"
+    if not path.exists():
+        return 0, len(points)
+    finished = ResultsFile(path, resolved.axis_names).finished_points(resolved.controller_labels)
+    return len({p.point_id for p in points} & set(finished)), len(points)
 
 
 def _tasks(runnable, fidelity: str, full_checks: int, cache_dir, progress: bool) -> list[tuple]:

@@ -264,7 +264,9 @@ def test_an_earlier_folder_of_the_same_kind_is_accepted(tmp_path, capsys, monkey
     monkeypatch.setattr("citysim.sweep.runner.run_sweep", lambda sweep, out, **k: calls.append(out) or counts)
     sweep = folder_with(tmp_path / "sw", "sweep.json", "results.csv", "points/", "plots/", "report.html")
     assert main(["sweep", "s.yaml", "--out", str(sweep), "--no-progress"]) == 0
-    assert calls == [run, sweep]
+    # the run is built under its own name in a hidden folder beside it, then renamed into place
+    assert calls[0].name == run.name and calls[0].parent.name.startswith(".run.partial-") and calls[1] == sweep
+    assert run.is_dir() and sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".run")) == []
     assert "2 already done" in capsys.readouterr().out
 
 

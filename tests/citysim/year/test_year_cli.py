@@ -52,7 +52,7 @@ def _no_year(tmp_path, toy_file):
 
 
 @pytest.mark.parametrize(("extra", "needles"), [
-    (["--timezone", "Europe/Berlni"], ["year.timezone", "Europe/Berlin"]),
+    (["--timezone", "Europe/Berlni"], ["--timezone", "did you mean Europe/Berlin"]),
     (["--controllers", "always_on,pri"], ["controllers", "pir"]),
     (["--lat", "95"], ["--lat", "<= 90"]),
 ])
