@@ -162,6 +162,7 @@ def _run_in_pool(scenario, groups, parts, traffic, fidelity, sensor_model, bar, 
                     except BrokenProcessPool:
                         raise_if_terminated()  # the workers went because the user stopped the run
                         exits = exit_codes({**processes, **worker_processes(pool)})
+                        _drain(q, bar, started, timeout_s=None)  # "started" notes still on their way
                         raise WorkerLost(_lost_message(tasks, started, exits, task)) from None
             _drain(q, bar, started, timeout_s=None)
     return results
