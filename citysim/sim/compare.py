@@ -36,7 +36,7 @@ from citysim.sim.loop import check_controllers, check_fidelity, controller_spec
 from citysim.sim.progress import SimulatedTimeBar
 from citysim.sim.replay import record_traffic
 from citysim.sim.together import part_path, run_together
-from citysim.sim.workers import WorkerLost, describe_exit, spawn_pool, worker_exits
+from citysim.sim.workers import WorkerLost, describe_exit, exit_codes, spawn_pool, worker_processes
 from citysim.world.approaches import approaches
 from citysim.world.coverage import camera_coverage
 from citysim.world.street import build_street
@@ -146,14 +146,14 @@ def _run_in_pool(scenario, groups, parts, traffic, fidelity, sensor_model, bar, 
     traffic_arg = None if traffic is None else str(traffic)
     tasks = ([] if traffic is None else [[]]) + list(groups)  # [] is the recorder
     started: dict[int, int] = {}  # task -> pid of the worker running it
-    exits: dict[int, int | None] = {}
+    processes: dict[int, object] = {}  # pid -> Process, kept past the pool's own table
     with mp.Manager() as manager:
         q = manager.Queue()
         with spawn_pool(workers) as pool:
             pending = {pool.submit(_worker, (i, scenario, group, str(parts), q, traffic_arg, fidelity, sensor_model)): i
                        for i, group in enumerate(tasks)}  # fmt: skip
             while pending:
-                exits.update(worker_exits(pool))
+                processes.update(worker_processes(pool))
                 _drain(q, bar, started, timeout_s=0.2)
                 for f in [f for f in pending if f.done()]:
                     task = pending.pop(f)
@@ -161,7 +161,8 @@ def _run_in_pool(scenario, groups, parts, traffic, fidelity, sensor_model, bar, 
                         results.update(f.result())
                     except BrokenProcessPool:
                         raise_if_terminated()  # the workers went because the user stopped the run
-                        exits.update(worker_exits(pool))
+                        exits = exit_codes({**processes, **worker_processes(pool)})
+                        _drain(q, bar, started, timeout_s=None)  # "started" notes still on their way
                         raise WorkerLost(_lost_message(tasks, started, exits, task)) from None
             _drain(q, bar, started, timeout_s=None)
     return results

@@ -121,11 +121,17 @@ def spawn_pool(max_workers: int) -> Iterator[ProcessPoolExecutor]:
     pool.shutdown(wait=True)
 
 
-def worker_exits(pool: ProcessPoolExecutor) -> dict[int, int | None]:
-    """The pool's worker processes by pid with their exit codes (None: still running; -N: ended
-    by signal N), read from the executor's own table of them."""
-    processes = getattr(pool, "_processes", None) or {}
-    return {pid: process.exitcode for pid, process in dict(processes).items()}
+def worker_processes(pool: ProcessPoolExecutor) -> dict[int, object]:
+    """The pool's worker processes by pid (``multiprocessing`` Process objects), from the
+    executor's own table of them; keep them: a broken pool clears its table."""
+    return dict(getattr(pool, "_processes", None) or {})
+
+
+def exit_codes(processes: dict[int, object], wait_s: float = 2.0) -> dict[int, int | None]:
+    """Each process's exit code (-N: ended by signal N; None: still running after ``wait_s``)."""
+    for process in processes.values():
+        process.join(wait_s)
+    return {pid: process.exitcode for pid, process in processes.items()}
 
 
 def describe_exit(code: int | None) -> str:
