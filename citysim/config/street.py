@@ -1,8 +1,9 @@
 """Scenario schema for the static street and the lamp chain (with the lamps' camera).
 
-Conventions: world frame of DESIGN.md (x along the street from 0 to
-``length_m``, y across it, z up, metres). Lanes and sidewalks are given by the
-y of their centre line and their width.
+Conventions: street coordinates of DESIGN.md: ``s`` metres along the centreline (on the
+straight street without ``centreline_m``, s = x from 0 to ``length_m``) and ``d`` metres to
+its left (y on the straight street); z up. Fields named ``x_m``/``y_m`` here are s/d. Lanes and
+sidewalks are given by the offset d of their centre line and their width.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pydantic import (
 )
 
 from citysim.config.base import FieldPathError, Spec
+from citysim.config.street_layout import CentrelineMixin, PoleSpec, check_poles, check_side_entries
 from detector.camera import CameraModel
 
 #: Smallest lane that holds the widest car of Table 1 (1.8 m) with clearance.
@@ -60,7 +62,7 @@ class ScenerySpec(Spec):
     seed: int | None = Field(default=None, ge=0)
 
 
-class StreetSpec(Spec):
+class StreetSpec(CentrelineMixin):
     length_m: float = Field(ge=30, le=5000)
     lanes: tuple[LaneSpec, ...] = ()
     sidewalks: tuple[SidewalkSpec, ...] = ()
@@ -97,6 +99,7 @@ class StreetSpec(Spec):
                     ("crossings_x_m", i),
                     f"crossing at x={x:g} m must lie within {lo:g}..{hi:g} m (got {x:g})",
                 )
+        check_side_entries(self.side_entries, self.length_m)
         if self.crossings_x_m and not self.has_both_sides:
             raise FieldPathError(
                 ("crossings_x_m",),
@@ -246,7 +249,10 @@ class LampsSpec(Spec):
     count: int | None = Field(default=None, ge=1, le=1000)
     spacing_m: float | None = Field(default=None, gt=0, le=1000)
     first_x_m: float | None = Field(default=None, ge=0)
-    y_m: float = Field(ge=-100, le=100, description="across-street position of the poles")
+    y_m: float | None = Field(
+        default=None, ge=-100, le=100, description="offset d of the poles (optional with poles)"
+    )
+    poles: tuple[PoleSpec, ...] | None = None
     pole_height_m: float = Field(default=6.0, gt=0, le=30)
     luminaire: LuminaireSpec = LuminaireSpec()
     camera: LampCameraSpec
@@ -255,7 +261,13 @@ class LampsSpec(Spec):
 
     @model_validator(mode="after")
     def _chain_and_camera(self) -> LampsSpec:
-        if self.x_m is not None:
+        if self.poles is not None:
+            if self.x_m is not None or self.count is not None or self.spacing_m is not None:
+                raise FieldPathError(("poles",), "give either poles (surveyed lamps) or x_m / count + spacing_m, not both")
+            check_poles(self.poles)
+        elif self.y_m is None:
+            raise FieldPathError(("y_m",), "the poles' offset y_m is required (or give surveyed lamps as poles)")
+        elif self.x_m is not None:
             if self.count is not None or self.spacing_m is not None or self.first_x_m is not None:
                 raise FieldPathError(
                     ("x_m",), "give either x_m (explicit positions) or count + spacing_m, not both"
@@ -290,9 +302,18 @@ class LampsSpec(Spec):
         return 1 if self.camera.back_heading_deg is None else 2
 
     def heading_of(self, lamp_index: int) -> float:
-        """Lamp ``lamp_index``'s camera heading, deg CCW from +x."""
+        """Lamp ``lamp_index``'s camera heading, deg CCW from the local street direction (toward +s)."""
         headings = self.camera.headings_deg
         return self.camera.heading_deg if headings is None else headings[lamp_index]
+
+    def pole_fields(self, lamp_index: int) -> tuple[float, float, float, float | None]:
+        """Lamp ``lamp_index``'s (d_m offset, pole height_m, rated_power_w, world heading_deg or None)."""
+        pole = None if self.poles is None else self.poles[lamp_index]
+        if pole is None:
+            return self.y_m, self.pole_height_m, self.luminaire.rated_power_w, None
+        height = self.pole_height_m if pole.height_m is None else pole.height_m
+        power = self.luminaire.rated_power_w if pole.rated_power_w is None else pole.rated_power_w
+        return pole.d_m, height, power, pole.heading_deg
 
     def _build_camera(self) -> CameraModel:
         spec = self.camera
@@ -322,6 +343,9 @@ class LampsSpec(Spec):
 
     @property
     def positions_x_m(self) -> tuple[float, ...]:
+        """Each lamp's s along the street, m."""
+        if self.poles is not None:
+            return tuple(p.s_m for p in self.poles)
         if self.x_m is not None:
             return self.x_m
         first = self.first_x_m if self.first_x_m is not None else self.spacing_m / 2
