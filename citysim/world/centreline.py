@@ -6,12 +6,12 @@ counter-clockwise from +x. Beyond its ends the centreline continues straight alo
 last segments, with cross-sections square to them, so s < 0 and s > length_m map too (agents enter
 and leave there).
 
-Off the centreline, a segment's cross-section lines are interpolated between the mitre directions
-at its two vertices (the bisectors of the turns), so the map is continuous round a bend on both
-sides: a point d to the left of a vertex lies on the bisector, ``d / cos(turn / 2)`` from it, and
-the distance of any point from its segment's line is exactly its ``d``. It is one to one while
-``|d|`` is smaller than the bend's radius (a bend's inside reaches the vertex at
-``|d| = segment length / tan(turn / 2)``).
+Off the centreline, the cross-sections are square to the segment, except within ``BLEND_M`` (at
+most half the segment) of a bent vertex, where they turn linearly in s to the mitre direction (the
+bisector of the turn): the map is continuous round a bend on both sides, a point d to the left of
+a vertex lies on the bisector ``d / cos(turn / 2)`` from it, and the distance of any point from its
+segment's line is exactly its ``d``. It is one to one while, on the inside of a bend,
+``|d| < blend / tan(turn / 2)`` (30 m at a 90-degree bend between segments of 60 m or more).
 """
 
 from __future__ import annotations
@@ -21,6 +21,10 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+
+#: Round a vertex the cross-sections turn over this much street on either side of it (at most half
+#: a segment), m: beyond it they are square to the segment.
+BLEND_M = 30.0
 
 
 @dataclass(frozen=True)
@@ -32,7 +36,8 @@ class Centreline:
     def __post_init__(self) -> None:
         if len(self.points_m) < 2:
             raise ValueError(f"a centreline needs >= 2 points, got {len(self.points_m)}")
-        if np.any(self._lengths_m <= 0):
+        lengths = np.hypot(*np.diff(np.asarray(self.points_m, dtype=np.float64), axis=0).T)
+        if np.any(lengths <= 0):
             raise ValueError("a centreline's consecutive points must differ")
 
     @classmethod
@@ -41,54 +46,54 @@ class Centreline:
         return cls(((0.0, 0.0), (float(length_m), 0.0)))
 
     @cached_property
-    def _pts(self) -> np.ndarray:
-        return np.asarray(self.points_m, dtype=np.float64)
-
-    @cached_property
-    def _lengths_m(self) -> np.ndarray:
-        return np.hypot(*np.diff(np.asarray(self.points_m, dtype=np.float64), axis=0).T)
-
-    @cached_property
-    def _cum_m(self) -> np.ndarray:
-        """s at each point, m."""
-        return np.concatenate([[0.0], np.cumsum(self._lengths_m)])
-
-    @cached_property
-    def _units(self) -> np.ndarray:
-        """(M, 2) unit direction of each segment."""
-        return np.diff(self._pts, axis=0) / self._lengths_m[:, None]
-
-    @cached_property
-    def _mitres(self) -> np.ndarray:
-        """(M + 1, 2): at each point, the vector whose projection on each adjacent segment's left
-        normal is 1 (the left normal itself at the ends and where the line runs straight on)."""
-        u = self._units
-        normals = np.column_stack([-u[:, 1], u[:, 0]])
-        inner = normals[:-1] + normals[1:]
-        inner = inner / (1.0 + np.einsum("ij,ij->i", normals[:-1], normals[1:]))[:, None]
-        return np.vstack([normals[:1], inner, normals[-1:]])
+    def _pieces(self) -> tuple[np.ndarray, ...]:
+        """The polyline cut into straight pieces: each segment's blend near each bent vertex
+        (``BLEND_M``, at most half the segment) and its square middle. Per piece (P pieces): start
+        point (P, 2), unit direction (P, 2), length (P,), s at its start (P + 1,), and the
+        cross-section vectors at its start and end (P, 2 each): the left normal, or at a vertex its
+        mitre (the vector projecting to 1 on both adjacent normals)."""
+        pts = np.asarray(self.points_m, dtype=np.float64)
+        seg = np.diff(pts, axis=0)
+        lengths = np.hypot(seg[:, 0], seg[:, 1])
+        units = seg / lengths[:, None]
+        normals = np.column_stack([-units[:, 1], units[:, 0]])
+        mitres = normals[:-1] + normals[1:]
+        mitres = mitres / (1.0 + np.einsum("ij,ij->i", normals[:-1], normals[1:]))[:, None]
+        at_vertex = np.vstack([normals[:1], mitres, normals[-1:]])
+        bent = np.concatenate([[False], np.abs(np.einsum("ij,ij->i", normals[:-1], normals[1:]) - 1.0) > 1e-12, [False]])
+        rows = []  # (start, unit, length, cross-section at start, at end)
+        for k, length in enumerate(lengths.tolist()):
+            blend = min(BLEND_M, length / 2)
+            cuts = [0.0, blend if bent[k] else 0.0, length - blend if bent[k + 1] else length, length]
+            vectors = [at_vertex[k], normals[k], normals[k], at_vertex[k + 1]]
+            for j in range(3):
+                if cuts[j + 1] > cuts[j]:
+                    rows.append((pts[k] + cuts[j] * units[k], units[k], cuts[j + 1] - cuts[j], vectors[j], vectors[j + 1]))
+        start, unit, piece_m, a, b = (np.array(col, dtype=np.float64) for col in zip(*rows, strict=True))
+        return start, unit, piece_m, np.concatenate([[0.0], np.cumsum(piece_m)]), a, b
 
     @cached_property
     def is_straight_x(self) -> bool:
         """True for the street along +x from (0, 0) (every point on y = 0, x increasing): the
         conversions are then the identity and return their inputs unchanged."""
-        pts = self._pts
+        pts = np.asarray(self.points_m, dtype=np.float64)
         return bool(pts[0, 0] == 0.0 and np.all(pts[:, 1] == 0.0) and np.all(np.diff(pts[:, 0]) > 0))
 
     @property
     def length_m(self) -> float:
         """Polyline length, m."""
-        return float(self._cum_m[-1])
+        return float(self._pieces[3][-1])
 
-    def _segment(self, s_m: np.ndarray) -> np.ndarray:
-        return np.clip(np.searchsorted(self._cum_m, s_m, side="right") - 1, 0, len(self._lengths_m) - 1)
+    def _piece(self, s_m: np.ndarray) -> np.ndarray:
+        cum = self._pieces[3]
+        return np.clip(np.searchsorted(cum, s_m, side="right") - 1, 0, len(cum) - 2)
 
     def heading_rad(self, s_m):
         """The street direction (toward increasing s) at ``s_m``, rad CCW from +x; at a vertex the
         segment after it. Vectorised over arrays; a float for a float."""
         if self.is_straight_x:
             return np.zeros(np.shape(s_m)) if np.ndim(s_m) else 0.0
-        u = self._units[self._segment(np.asarray(s_m, dtype=np.float64))]
+        u = self._pieces[1][self._piece(np.asarray(s_m, dtype=np.float64))]
         out = np.arctan2(u[..., 1], u[..., 0])
         return out if np.ndim(s_m) else float(out)
 
@@ -96,46 +101,46 @@ class Centreline:
         """World (x, y) m of street coordinates (``s_m``, ``d_m``); arrays broadcast, floats give floats."""
         if self.is_straight_x:
             return s_m, d_m
+        start, unit, piece_m, cum, a, b = self._pieces
         s = np.asarray(s_m, dtype=np.float64)
         d = np.asarray(d_m, dtype=np.float64)
-        k = self._segment(s)
-        t = np.clip((s - self._cum_m[k]) / self._lengths_m[k], 0.0, 1.0)  # beyond the ends: the end normal
-        normal = (1.0 - t)[..., None] * self._mitres[k] + t[..., None] * self._mitres[k + 1]
-        xy = self._pts[k] + (s - self._cum_m[k])[..., None] * self._units[k] + d[..., None] * normal
+        k = self._piece(s)
+        t = np.clip((s - cum[k]) / piece_m[k], 0.0, 1.0)  # beyond the ends: the end normal
+        normal = (1.0 - t)[..., None] * a[k] + t[..., None] * b[k]
+        xy = start[k] + (s - cum[k])[..., None] * unit[k] + d[..., None] * normal
         if np.ndim(xy) == 1:
             return float(xy[0]), float(xy[1])
         return xy[..., 0], xy[..., 1]
 
     def to_sd(self, x_m, y_m):
-        """Street coordinates (s, d) m of world points (``x_m``, ``y_m``): of the segments whose
+        """Street coordinates (s, d) m of world points (``x_m``, ``y_m``): of the pieces whose
         stretch (the first and last extended beyond the ends) holds the point, the one it is
         nearest (smallest |d|). Arrays broadcast; floats give floats."""
         if self.is_straight_x:
             return x_m, y_m
+        start, u, piece_m, cum, a, b = self._pieces
         x = np.asarray(x_m, dtype=np.float64)
         y = np.asarray(y_m, dtype=np.float64)
         shape = np.broadcast(x, y).shape
-        px = np.broadcast_to(x, shape).reshape(-1, 1) - self._pts[None, :-1, 0]
-        py = np.broadcast_to(y, shape).reshape(-1, 1) - self._pts[None, :-1, 1]
-        u = self._units
+        px = np.broadcast_to(x, shape).reshape(-1, 1) - start[None, :, 0]
+        py = np.broadcast_to(y, shape).reshape(-1, 1) - start[None, :, 1]
         along = px * u[:, 0] + py * u[:, 1]
         d = -px * u[:, 1] + py * u[:, 0]
-        alpha = np.einsum("ij,ij->i", self._mitres[:-1], u)
-        beta = np.einsum("ij,ij->i", self._mitres[1:], u)
-        denom = self._lengths_m + d * (beta - alpha)
+        alpha = np.einsum("ij,ij->i", a, u)
+        beta = np.einsum("ij,ij->i", b, u)
+        denom = piece_m + d * (beta - alpha)
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (along - d * alpha) / denom
         ok = (denom > 0) & (t >= 0) & (t <= 1)
         # beyond the ends the cross-sections are the end normals: s is the plain distance along
-        before, after = along[:, 0] < 0, along[:, -1] > self._lengths_m[-1]
-        t[:, 0] = np.where(before, along[:, 0] / self._lengths_m[0], t[:, 0])
-        t[:, -1] = np.where(after, along[:, -1] / self._lengths_m[-1], t[:, -1])
+        before, after = along[:, 0] < 0, along[:, -1] > piece_m[-1]
+        t[:, 0] = np.where(before, along[:, 0] / piece_m[0], t[:, 0])
+        t[:, -1] = np.where(after, along[:, -1] / piece_m[-1], t[:, -1])
         ok[:, 0] |= before
         ok[:, -1] |= after
-        cost = np.where(ok, np.abs(d), np.inf)
-        best = np.argmin(cost, axis=1)
+        best = np.argmin(np.where(ok, np.abs(d), np.inf), axis=1)
         rows = np.arange(len(best))
-        s = self._cum_m[best] + t[rows, best] * self._lengths_m[best]
+        s = cum[best] + t[rows, best] * piece_m[best]
         d_best = d[rows, best]
         if not shape:
             return float(s[0]), float(d_best[0])
