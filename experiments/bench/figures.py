@@ -322,6 +322,12 @@ def bench_traffic() -> dict:
     return bench_world()
 
 
+def bench_curved_street() -> dict:
+    from experiments.bench.curved import bench_curved
+
+    return bench_curved()
+
+
 def bench_year_fast() -> dict:
     from experiments.bench.year import bench_year
 
@@ -329,7 +335,7 @@ def bench_year_fast() -> dict:
 
 
 SECTIONS = (bench_detector, bench_render, bench_sim, bench_traffic, bench_sweep, bench_night_sample, bench_shared_frames,
-            bench_night_fast, bench_night_fast_whole, bench_year_fast)
+            bench_night_fast, bench_night_fast_whole, bench_curved_street, bench_year_fast)
 
 
 def main(argv: list[str] | None = None) -> int:
