@@ -180,8 +180,9 @@ class CameraGeometry:
         # per agent its footprint centre and the point above it at its height, (2 N, 3)
         pts = np.array([v for a in agents for v in (a.x_m, a.y_m, 0.0, a.x_m, a.y_m, a.height_m)],
                        dtype=np.float64).reshape(-1, 3)  # fmt: skip
-        if not placed:
-            pts[:, 0], pts[:, 1] = self.line.to_xy(pts[:, 0], pts[:, 1])
+        if not placed:  # a few agents at a time: one float conversion each
+            for n, agent in enumerate(agents):
+                pts[2 * n, :2] = pts[2 * n + 1, :2] = self.line.to_xy(float(agent.x_m), float(agent.y_m))
         uv = self.rays[lamp_index].project_px(pts)  # the camera's ``project``, its per-call cost left out
         boxes = []
         for n, agent in enumerate(agents):

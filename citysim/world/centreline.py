@@ -16,6 +16,7 @@ segment's line is exactly its ``d``. It is one to one while, on the inside of a 
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -73,6 +74,53 @@ class Centreline:
         return start, unit, piece_m, np.concatenate([[0.0], np.cumsum(piece_m)]), a, b
 
     @cached_property
+    def _rows(self) -> tuple[list, ...]:
+        """``_pieces`` as Python lists (start, unit, length, s at start, a, b, heading rad), for one
+        point at a time: a float's conversion is then a few float operations, not numpy calls."""
+        start, unit, piece_m, cum, a, b = self._pieces
+        heading = np.arctan2(unit[:, 1], unit[:, 0])
+        return (start.tolist(), unit.tolist(), piece_m.tolist(), cum.tolist(), a.tolist(), b.tolist(),
+                heading.tolist())  # fmt: skip
+
+    def _piece_of(self, s_m: float) -> int:
+        cum = self._rows[3]
+        return min(max(bisect.bisect_right(cum, s_m) - 1, 0), len(cum) - 2)
+
+    def _xy_of(self, s_m: float, d_m: float) -> tuple[float, float]:
+        """``to_xy`` of one point, in floats."""
+        start, unit, piece_m, cum, a, b, _ = self._rows
+        k = self._piece_of(s_m)
+        ds = s_m - cum[k]
+        t = min(max(ds / piece_m[k], 0.0), 1.0)
+        nx = (1.0 - t) * a[k][0] + t * b[k][0]
+        ny = (1.0 - t) * a[k][1] + t * b[k][1]
+        return start[k][0] + ds * unit[k][0] + d_m * nx, start[k][1] + ds * unit[k][1] + d_m * ny
+
+    def _sd_of(self, x_m: float, y_m: float) -> tuple[float, float]:
+        """``to_sd`` of one point, in floats."""
+        start, unit, piece_m, cum, a, b, _ = self._rows
+        last = len(piece_m) - 1
+        best = (math.inf, 0.0, 0.0)
+        for k in range(last + 1):
+            (px, py), (ux, uy) = start[k], unit[k]
+            dx, dy = x_m - px, y_m - py
+            along, d = dx * ux + dy * uy, -dx * uy + dy * ux
+            if abs(d) >= best[0]:
+                continue
+            if k == 0 and along < 0 or k == last and along > piece_m[k]:
+                t = along / piece_m[k]  # beyond the ends: square cross-sections
+            else:
+                alpha, beta = a[k][0] * ux + a[k][1] * uy, b[k][0] * ux + b[k][1] * uy
+                denom = piece_m[k] + d * (beta - alpha)
+                if not denom > 0:
+                    continue
+                t = (along - d * alpha) / denom
+                if not 0.0 <= t <= 1.0:
+                    continue
+            best = (abs(d), cum[k] + t * piece_m[k], d)
+        return best[1], best[2]
+
+    @cached_property
     def is_straight_x(self) -> bool:
         """True for the street along +x from (0, 0) (every point on y = 0, x increasing): the
         conversions are then the identity and return their inputs unchanged."""
@@ -93,6 +141,8 @@ class Centreline:
         segment after it. Vectorised over arrays; a float for a float."""
         if self.is_straight_x:
             return np.zeros(np.shape(s_m)) if np.ndim(s_m) else 0.0
+        if isinstance(s_m, float):
+            return self._rows[6][self._piece_of(s_m)]
         u = self._pieces[1][self._piece(np.asarray(s_m, dtype=np.float64))]
         out = np.arctan2(u[..., 1], u[..., 0])
         return out if np.ndim(s_m) else float(out)
@@ -101,6 +151,8 @@ class Centreline:
         """World (x, y) m of street coordinates (``s_m``, ``d_m``); arrays broadcast, floats give floats."""
         if self.is_straight_x:
             return s_m, d_m
+        if isinstance(s_m, float) and isinstance(d_m, float):  # one point: floats, no numpy
+            return self._xy_of(s_m, d_m)
         start, unit, piece_m, cum, a, b = self._pieces
         s = np.asarray(s_m, dtype=np.float64)
         d = np.asarray(d_m, dtype=np.float64)
@@ -118,6 +170,8 @@ class Centreline:
         nearest (smallest |d|). Arrays broadcast; floats give floats."""
         if self.is_straight_x:
             return x_m, y_m
+        if isinstance(x_m, float) and isinstance(y_m, float):  # one point: floats, no numpy
+            return self._sd_of(x_m, y_m)
         start, u, piece_m, cum, a, b = self._pieces
         x = np.asarray(x_m, dtype=np.float64)
         y = np.asarray(y_m, dtype=np.float64)
@@ -152,7 +206,7 @@ class Centreline:
         if self.is_straight_x:
             return dx_m, dy_m
         h = self.heading_rad(s_m)
-        c, s = np.cos(h), np.sin(h)
+        c, s = (math.cos(h), math.sin(h)) if isinstance(h, float) else (np.cos(h), np.sin(h))
         return c * dx_m - s * dy_m, s * dx_m + c * dy_m
 
     def unrotate(self, s_m, vx_m, vy_m):
@@ -160,7 +214,7 @@ class Centreline:
         if self.is_straight_x:
             return vx_m, vy_m
         h = self.heading_rad(s_m)
-        c, s = np.cos(h), np.sin(h)
+        c, s = (math.cos(h), math.sin(h)) if isinstance(h, float) else (np.cos(h), np.sin(h))
         return c * vx_m + s * vy_m, -s * vx_m + c * vy_m
 
 

@@ -87,3 +87,16 @@ def test_a_centreline_needs_two_distinct_points():
         Centreline(((0.0, 0.0),))
     with pytest.raises(ValueError, match="must differ"):
         Centreline(((0.0, 0.0), (0.0, 0.0)))
+
+
+def test_one_point_in_floats_converts_as_the_arrays_do():
+    line = Centreline(((0.0, 0.0), (50.0, 10.0), (90.0, -5.0), (120.0, 30.0)))
+    rng = np.random.default_rng(1)
+    s_m, d_m = rng.uniform(-10.0, line.length_m + 10.0, 300), rng.uniform(-8.0, 8.0, 300)
+    x_m, y_m = line.to_xy(s_m, d_m)
+    one = np.array([line.to_xy(float(s), float(d)) for s, d in zip(s_m, d_m, strict=True)])
+    assert np.array_equal(one, np.column_stack([x_m, y_m]))
+    back = np.array([line.to_sd(float(x), float(y)) for x, y in zip(x_m, y_m, strict=True)])
+    assert np.array_equal(back, np.column_stack(line.to_sd(x_m, y_m)))
+    assert isinstance(line.heading_rad(60.0), float)
+    assert line.heading_rad(60.0) == pytest.approx(float(line.heading_rad(np.array([60.0]))[0]))
