@@ -167,21 +167,22 @@ class LampCameraSpec(Spec):
     ``file`` is relative to the scenario file. A camera file's own pose (its
     testbed height, x, y, yaw) is not used: the camera hangs on each pole at
     ``height_m`` (default: ``lamps.pole_height_m``) looking along ``heading_deg``
-    (deg CCW from +x).
+    (deg CCW from the local street direction toward increasing s: from +x on a straight street;
+    a surveyed pole's own ``heading_deg`` is a world heading instead).
     """
 
     file: str | None = None
     heading_deg: float = Field(default=0.0, ge=-360, le=360)
     headings_deg: tuple[float, ...] | None = Field(
         default=None,
-        description="one heading per lamp (deg CCW from +x), overriding heading_deg: e.g. the "
+        description="one heading per lamp (deg CCW from the street direction), overriding heading_deg: e.g. the "
         "first camera looking back at the street's approach",
     )
     back_heading_deg: float | None = Field(
         default=None,
         ge=-360,
         le=360,
-        description="a second camera on every pole looking this way (deg CCW from +x), e.g. 188: "
+        description="a second camera on every pole looking this way (deg CCW from the street direction), e.g. 188: "
         "back along -x, turned 8 deg toward the road, so the stretch under each pole is seen",
     )
     height_m: float | None = Field(default=None, gt=0, le=30)
