@@ -1,9 +1,8 @@
 """Scenario schema for the static street and the lamp chain (with the lamps' camera).
 
-Conventions: street coordinates of DESIGN.md: ``s`` metres along the centreline (on the
-straight street without ``centreline_m``, s = x from 0 to ``length_m``) and ``d`` metres to
-its left (y on the straight street); z up. Fields named ``x_m``/``y_m`` here are s/d. Lanes and
-sidewalks are given by the offset d of their centre line and their width.
+Conventions: world frame of docs/design/architecture.md (x along the street from 0 to
+``length_m``, y across it, z up, metres). Lanes and sidewalks are given by the
+y of their centre line and their width.
 """
 
 from __future__ import annotations
@@ -63,6 +62,10 @@ class ScenerySpec(Spec):
 
 
 class StreetSpec(CentrelineMixin):
+    """The street. With ``centreline_m`` (``config.street_layout``) the fields named x/y here are
+    street coordinates: ``s`` metres along the centreline and ``d`` metres to its left (on the
+    straight street without it, s = x and d = y). Design: docs/design/streets.md."""
+
     length_m: float = Field(ge=30, le=5000)
     lanes: tuple[LaneSpec, ...] = ()
     sidewalks: tuple[SidewalkSpec, ...] = ()

@@ -1,6 +1,6 @@
 """The street's centreline: conversions between street coordinates (s, d) and the world (x, y).
 
-Conventions (DESIGN.md): world x east, y north, metres; ``s`` metres along the centreline from its
+Conventions: world x east, y north, metres; ``s`` metres along the centreline from its
 first point, ``d`` metres to the LEFT of it looking along increasing ``s``; headings in radians
 counter-clockwise from +x. Beyond its ends the centreline continues straight along its first and
 last segments, with cross-sections square to them, so s < 0 and s > length_m map too (agents enter

@@ -1,11 +1,9 @@
 """The static street: lanes, sidewalks, kerbs, the lamp chain and scenery.
 
 Pure geometry and reflectances, built once per scenario; the world moves agents
-over it and the renderer paints it. Conventions: street coordinates of DESIGN.md
-(s along the centreline from 0 to ``length_m``, d to its left, z up, m) for lanes,
-sidewalks, zones and the scenery's place; the world frame (x east, y north) for what
-stands in the world: a lamp's ``x_m``/``y_m`` and its cameras. ``Street.centreline``
-converts; on the straight street (the default) s = x and d = y.
+over it and the renderer paints it. Conventions: world frame of docs/design/architecture.md (x
+along the street from 0 to ``length_m``, y across it, z up, m). Lane and
+sidewalk positions are given by the y of their centre line.
 """
 
 from __future__ import annotations
@@ -100,6 +98,11 @@ class CameraSite:
 
 @dataclass(frozen=True)
 class Street:
+    """The street in street coordinates (s along ``centreline`` from 0 to ``length_m``, d to its left;
+    lanes, sidewalks, zones, crossings, side entries) with what stands in the world frame (x east,
+    y north: the lamps' ``x_m``/``y_m``, their cameras, the scenery). ``centreline`` converts; on the
+    straight street (the default) s = x and d = y. Design: docs/design/streets.md."""
+
     length_m: float
     lanes: tuple[Lane, ...]
     sidewalks: tuple[Sidewalk, ...]

@@ -13,10 +13,7 @@ planner, ``citysim.config.kinds.AgentKind.route``):
 * "lane" (vehicles): keep a lane in its direction;
 * "verge_wander" (animals): come out of the verge, wander across the street and leave.
 
-A street's side entries turn a share of each class's routes into ones that join or leave mid-street
-(``citysim.world.side_entries``).
-
-Conventions: world frame of DESIGN.md; leg offsets are metres to the left of
+Conventions: world frame of docs/design/architecture.md; leg offsets are metres to the left of
 the direction of travel (see ``citysim.world.geometry``).
 """
 
