@@ -246,11 +246,13 @@ class Scenario(Spec):
         for i, x in enumerate(xs):
             if not 0 <= x <= street.length_m:
                 where = ("lamps", "x_m", i) if lamps.x_m is not None else ("lamps", "count")
+                where = ("lamps", "poles", i, "s_m") if lamps.poles is not None else where
                 raise FieldPathError(
                     where,
                     f"lamp {i} at x={x:g} m lies outside the street (0..{street.length_m:g} m)",
                 )
-        problem = street.pole_clearance_problem(lamps.y_m)
+        # surveyed poles stand where they were surveyed (on a sidewalk, a wall): no clearance check
+        problem = None if lamps.poles is not None else street.pole_clearance_problem(lamps.y_m)
         if problem:
             raise FieldPathError(("lamps", "y_m"), problem)
         classes = self.traffic.classes

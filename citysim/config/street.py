@@ -20,6 +20,7 @@ from pydantic import (
 )
 
 from citysim.config.base import FieldPathError, Spec
+from citysim.config.street_layout import CentrelineMixin, PoleSpec, check_poles, check_side_entries
 from detector.camera import CameraModel
 
 #: Smallest lane that holds the widest car of Table 1 (1.8 m) with clearance.
@@ -60,7 +61,11 @@ class ScenerySpec(Spec):
     seed: int | None = Field(default=None, ge=0)
 
 
-class StreetSpec(Spec):
+class StreetSpec(CentrelineMixin):
+    """The street. With ``centreline_m`` (``config.street_layout``) the fields named x/y here are
+    street coordinates: ``s`` metres along the centreline and ``d`` metres to its left (on the
+    straight street without it, s = x and d = y). Design: docs/design/streets.md."""
+
     length_m: float = Field(ge=30, le=5000)
     lanes: tuple[LaneSpec, ...] = ()
     sidewalks: tuple[SidewalkSpec, ...] = ()
@@ -97,6 +102,7 @@ class StreetSpec(Spec):
                     ("crossings_x_m", i),
                     f"crossing at x={x:g} m must lie within {lo:g}..{hi:g} m (got {x:g})",
                 )
+        check_side_entries(self.side_entries, self.length_m)
         if self.crossings_x_m and not self.has_both_sides:
             raise FieldPathError(
                 ("crossings_x_m",),
@@ -164,21 +170,22 @@ class LampCameraSpec(Spec):
     ``file`` is relative to the scenario file. A camera file's own pose (its
     testbed height, x, y, yaw) is not used: the camera hangs on each pole at
     ``height_m`` (default: ``lamps.pole_height_m``) looking along ``heading_deg``
-    (deg CCW from +x).
+    (deg CCW from the local street direction toward increasing s: from +x on a straight street;
+    a surveyed pole's own ``heading_deg`` is a world heading instead).
     """
 
     file: str | None = None
     heading_deg: float = Field(default=0.0, ge=-360, le=360)
     headings_deg: tuple[float, ...] | None = Field(
         default=None,
-        description="one heading per lamp (deg CCW from +x), overriding heading_deg: e.g. the "
+        description="one heading per lamp (deg CCW from the street direction), overriding heading_deg: e.g. the "
         "first camera looking back at the street's approach",
     )
     back_heading_deg: float | None = Field(
         default=None,
         ge=-360,
         le=360,
-        description="a second camera on every pole looking this way (deg CCW from +x), e.g. 188: "
+        description="a second camera on every pole looking this way (deg CCW from the street direction), e.g. 188: "
         "back along -x, turned 8 deg toward the road, so the stretch under each pole is seen",
     )
     height_m: float | None = Field(default=None, gt=0, le=30)
@@ -246,7 +253,10 @@ class LampsSpec(Spec):
     count: int | None = Field(default=None, ge=1, le=1000)
     spacing_m: float | None = Field(default=None, gt=0, le=1000)
     first_x_m: float | None = Field(default=None, ge=0)
-    y_m: float = Field(ge=-100, le=100, description="across-street position of the poles")
+    y_m: float | None = Field(
+        default=None, ge=-100, le=100, description="offset d of the poles (optional with poles)"
+    )
+    poles: tuple[PoleSpec, ...] | None = None
     pole_height_m: float = Field(default=6.0, gt=0, le=30)
     luminaire: LuminaireSpec = LuminaireSpec()
     camera: LampCameraSpec
@@ -255,7 +265,13 @@ class LampsSpec(Spec):
 
     @model_validator(mode="after")
     def _chain_and_camera(self) -> LampsSpec:
-        if self.x_m is not None:
+        if self.poles is not None:
+            if self.x_m is not None or self.count is not None or self.spacing_m is not None:
+                raise FieldPathError(("poles",), "give either poles (surveyed lamps) or x_m / count + spacing_m, not both")
+            check_poles(self.poles)
+        elif self.y_m is None:
+            raise FieldPathError(("y_m",), "the poles' offset y_m is required (or give surveyed lamps as poles)")
+        elif self.x_m is not None:
             if self.count is not None or self.spacing_m is not None or self.first_x_m is not None:
                 raise FieldPathError(
                     ("x_m",), "give either x_m (explicit positions) or count + spacing_m, not both"
@@ -290,9 +306,18 @@ class LampsSpec(Spec):
         return 1 if self.camera.back_heading_deg is None else 2
 
     def heading_of(self, lamp_index: int) -> float:
-        """Lamp ``lamp_index``'s camera heading, deg CCW from +x."""
+        """Lamp ``lamp_index``'s camera heading, deg CCW from the local street direction (toward +s)."""
         headings = self.camera.headings_deg
         return self.camera.heading_deg if headings is None else headings[lamp_index]
+
+    def pole_fields(self, lamp_index: int) -> tuple[float, float, float, float | None]:
+        """Lamp ``lamp_index``'s (d_m offset, pole height_m, rated_power_w, world heading_deg or None)."""
+        pole = None if self.poles is None else self.poles[lamp_index]
+        if pole is None:
+            return self.y_m, self.pole_height_m, self.luminaire.rated_power_w, None
+        height = self.pole_height_m if pole.height_m is None else pole.height_m
+        power = self.luminaire.rated_power_w if pole.rated_power_w is None else pole.rated_power_w
+        return pole.d_m, height, power, pole.heading_deg
 
     def _build_camera(self) -> CameraModel:
         spec = self.camera
@@ -322,6 +347,9 @@ class LampsSpec(Spec):
 
     @property
     def positions_x_m(self) -> tuple[float, ...]:
+        """Each lamp's s along the street, m."""
+        if self.poles is not None:
+            return tuple(p.s_m for p in self.poles)
         if self.x_m is not None:
             return self.x_m
         first = self.first_x_m if self.first_x_m is not None else self.spacing_m / 2

@@ -165,12 +165,19 @@ class DetectorNetwork(DetectorConfirmed):
         self.last_x_m: list[dict[int, tuple[float, float]]] = [{} for _ in ctx.camera_lamps]
 
     def _direction(self, camera_index, t_s, det) -> int:
-        """+1 / -1 along x from the track's ground velocity (or positions), 0 when not yet known."""
+        """+1 / -1 along the street (s) from the track's ground velocity (or positions), 0 when not yet known."""
+        line = self.ctx.street.centreline
         if det.velocity_x_mps is not None:
-            return 0 if abs(det.velocity_x_mps) < 0.3 else int(np.sign(det.velocity_x_mps))
+            vx = det.velocity_x_mps
+            if not line.is_straight_x:  # the world velocity along the street where the camera looks
+                vx = float(line.unrotate(self.ctx.street.lamps[self.ctx.camera_lamps[camera_index]].along_m,
+                                         vx, det.velocity_y_mps or 0.0)[0])
+            return 0 if abs(vx) < 0.3 else int(np.sign(vx))
         cam = self.ctx.street.cameras[camera_index].camera
         x, y, w, h = det.box_px
         ground = cam.pixel_to_ground(np.array([[x + w / 2 - 0.5, y + h - 0.5]]))[0]
+        if not line.is_straight_x and np.isfinite(ground[0]):
+            ground = np.array(line.to_sd(float(ground[0]), float(ground[1])))  # s, d
         if not np.isfinite(ground[0]) or det.track_id is None:
             return 0
         seen = self.last_x_m[camera_index]

@@ -263,6 +263,7 @@ class DetectorLocated(DetectorPerFrame):
                 if ground is None:
                     continue
                 ground_x_m, ground_y_m = ground
+            ground_x_m, ground_y_m, vx_mps = self._on_street(ground_x_m, ground_y_m, d)
             key = (camera_index, d.track_id)
             track = self.tracks.get(key)
             if track is None:
@@ -271,12 +272,24 @@ class DetectorLocated(DetectorPerFrame):
             # group or pedestrian in glare, never the other way for long
             if EXTRAPOLATE_M.get(cls, 0.0) > EXTRAPOLATE_M.get(track.cls, 0.0):
                 track.cls = cls
-            track.observe(t_s, ground_x_m, d.velocity_x_mps)
+            track.observe(t_s, ground_x_m, vx_mps)
             if track.vx_mps is not None and abs(track.vx_mps) > IMPLAUSIBLE_MPS:
                 continue  # nothing on the street moves like that: an insect at the lens, a flicker
             track.prior_vx_mps = self.lane_prior_mps(track.cls, ground_y_m)
             zones = self.zones_for(ground_x_m, track.heading_vx_mps, track.cls)
             self.light_zones(self.camera_lamps[camera_index], t_s, zones)
+
+    def _on_street(self, x_m: float, y_m: float, detection) -> tuple[float, float, float | None]:
+        """A ground point (world x, y, m) and the detection's ground velocity in street coordinates:
+        (s m, d m, velocity along +s m/s or None); the same numbers on the straight street."""
+        line = self.ctx.street.centreline
+        vx = detection.velocity_x_mps
+        if line.is_straight_x:
+            return x_m, y_m, vx
+        s_m, d_m = line.to_sd(x_m, y_m)
+        if vx is not None:
+            vx = float(line.unrotate(s_m, vx, detection.velocity_y_mps or 0.0)[0])
+        return s_m, d_m, vx
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)

@@ -46,6 +46,9 @@ class PassiveInfrared(Controller):
         else:  # the step's rows of the chunk's columns: the same numbers, no agent's snapshot made
             rows = slice(agents.first, agents.first + len(agents))
             xy = np.stack([chunk.column("x_m")[rows], chunk.column("y_m")[rows]], axis=1)
+        line = self.ctx.street.centreline
+        if not line.is_straight_x:  # the sensors stand in the world; agents move in (s, d)
+            xy = np.column_stack(line.to_xy(xy[:, 0], xy[:, 1]))
         rel = xy[None, :, :] - self.pole_xy_m[:, None, :]  # lamps x agents x 2
         dist = np.linalg.norm(rel, axis=2)
         cos_angle = np.einsum("lak,lk->la", rel, self.heading) / np.maximum(dist, 1e-9)

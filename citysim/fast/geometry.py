@@ -6,9 +6,11 @@ camera's horizontal field of view plus a margin. Calibration counts how often th
 found each candidate; fast mode draws from those counts, so both sides must agree on who is a
 candidate: both call ``CameraGeometry.candidates``.
 
-Conventions: world x along the street, y across it, metres. A camera's *forward* distance is
-along its heading on the ground; *bearing* is the angle off the heading, radians, positive to
-the camera's left (+y when it looks toward +x).
+Conventions: agents come in street coordinates (``x_m`` = s along the centreline, ``y_m`` = d to
+its left, heading CCW from +s) and are placed in the world frame (x east, y north, metres) through
+``Street.centreline`` before any camera looks at them; on the straight street the two agree. A
+camera's *forward* distance is along its heading on the ground; *bearing* is the angle off the
+heading, radians, positive to the camera's left (+y when it looks toward +x).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import numpy as np
 
 from citysim.control.camera_rays import CameraRays
 from citysim.world.agents import AgentState
+from citysim.world.placement import columns_in_world
 from citysim.world.street import Street
 
 #: Beyond this forward distance nothing is a candidate (the detector ignores what is past 25 m).
@@ -91,7 +94,8 @@ class CameraGeometry:
         self.pole_xy_m = np.array([[c.position_m[0], c.position_m[1]] for c in cams], dtype=np.float64)
         self.heading_xy = np.array([[c.heading_unit[0], c.heading_unit[1]] for c in cams], dtype=np.float64)
         self.half_fov_rad = np.array([math.radians(c.horizontal_fov_deg) / 2.0 for c in cams])
-        self.lamp_x_m = np.array([site.x_m for site in street.lamps], dtype=np.float64)
+        self.line = street.centreline
+        self.lamp_x_m = np.array([site.along_m for site in street.lamps], dtype=np.float64)  # s
         # per camera, the lamps ahead within FAR_VIEW_M other than its own pole's and the neighbours'
         poles_xy = np.array([[site.x_m, site.y_m] for site in street.lamps], dtype=np.float64)
         ahead_m, _ = self._view(poles_xy)
@@ -110,9 +114,15 @@ class CameraGeometry:
         return self.candidates_at(xy, lit, heading)
 
     def candidates_at(self, xy: np.ndarray, lit: np.ndarray, heading: np.ndarray | None) -> Candidates:
-        """``candidates`` of agents standing at ``xy`` (A, 2; m) with their lights on where ``lit``
-        (A,), heading ``heading`` (A,; rad; None when no light is on). Every value is elementwise, so
-        the rows of many steps at once give each step's own, bit for bit."""
+        """``candidates`` of agents standing at ``xy`` (A, 2; street coordinates s, d in m) with their
+        lights on where ``lit`` (A,), heading ``heading`` (A,; rad from +s; None when no light is on).
+        Every value is elementwise, so the rows of many steps at once give each step's own, bit for bit."""
+        if not self.line.is_straight_x:
+            x_m, y_m, world_heading = columns_in_world(
+                self.line, xy[:, 0], xy[:, 1], np.zeros(len(xy)) if heading is None else heading
+            )
+            xy = np.column_stack([x_m, y_m])
+            heading = None if heading is None else world_heading
         forward, bearing = self._view(xy)
         off = np.abs(bearing)
         seen = (forward > 0.0) & (forward <= CANDIDATE_RANGE_M) & (off <= self.half_fov_rad + BEARING_MARGIN_RAD)
@@ -146,11 +156,15 @@ class CameraGeometry:
     def beam_box_px(self, lamp_index: int, agent: AgentState, ahead_m: float = BEAM_AHEAD_M) -> tuple[int, int, int, int]:
         """The box of the patch ``agent``'s light throws ``ahead_m`` ahead of it, in camera
         ``lamp_index``'s frame (px; as ``box_px``, standing on the patch's middle)."""
-        x_m = agent.x_m + ahead_m * math.cos(agent.heading_rad)
-        y_m = agent.y_m + ahead_m * math.sin(agent.heading_rad)
-        spot = AgentState(agent.object_id, agent.cls, x_m, y_m, agent.heading_rad, agent.speed_mps, BEAM_WIDTH_M,
+        x_m, y_m, heading = agent.x_m, agent.y_m, agent.heading_rad
+        if not self.line.is_straight_x:
+            x_m, y_m = self.line.to_xy(x_m, y_m)
+            heading = heading + self.line.heading_rad(agent.x_m)
+        x_m = x_m + ahead_m * math.cos(heading)
+        y_m = y_m + ahead_m * math.sin(heading)
+        spot = AgentState(agent.object_id, agent.cls, x_m, y_m, heading, agent.speed_mps, BEAM_WIDTH_M,
                           BEAM_WIDTH_M, BEAM_HEIGHT_M)  # fmt: skip
-        return self.boxes_px(lamp_index, [spot])[0]
+        return self._boxes_px(lamp_index, [spot], placed=True)[0]
 
     def box_px(self, lamp_index: int, agent: AgentState) -> tuple[int, int, int, int]:
         """An OpenCV (x, y, w, h) box of ``agent`` in camera ``lamp_index``'s distorted frame, px:
@@ -159,9 +173,16 @@ class CameraGeometry:
 
     def boxes_px(self, lamp_index: int, agents: Sequence[AgentState]) -> list[tuple[int, int, int, int]]:
         """``box_px`` of each of ``agents`` in camera ``lamp_index``, their points projected in one call."""
+        return self._boxes_px(lamp_index, agents, placed=self.line.is_straight_x)
+
+    def _boxes_px(self, lamp_index: int, agents: Sequence, placed: bool) -> list[tuple[int, int, int, int]]:
+        """``boxes_px`` of agents in street coordinates, or in the world frame when ``placed``."""
         # per agent its footprint centre and the point above it at its height, (2 N, 3)
         pts = np.array([v for a in agents for v in (a.x_m, a.y_m, 0.0, a.x_m, a.y_m, a.height_m)],
                        dtype=np.float64).reshape(-1, 3)  # fmt: skip
+        if not placed:  # a few agents at a time: one float conversion each
+            for n, agent in enumerate(agents):
+                pts[2 * n, :2] = pts[2 * n + 1, :2] = self.line.to_xy(float(agent.x_m), float(agent.y_m))
         uv = self.rays[lamp_index].project_px(pts)  # the camera's ``project``, its per-call cost left out
         boxes = []
         for n, agent in enumerate(agents):

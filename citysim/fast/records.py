@@ -37,6 +37,7 @@ from citysim.fast.model import (
 from citysim.metrics.collector import Collector
 from citysim.metrics.confusion import greedy_match, iou_matrix
 from citysim.world.agents import AgentState
+from citysim.world.placement import agents_in_world
 
 IOU_MATCH = 0.3
 #: A target detection matching no truth box whose ground point is this near a candidate is that
@@ -126,12 +127,14 @@ class StreetWatch(Collector):
         self.geometry = geometry
         self.fps = fps
         self.agents: list[AgentState] = []
+        self.world_agents: list[AgentState] = []
         self.levels = np.zeros(geometry.n)
         self.changes = LevelChanges(geometry)
         self._placed = None
 
     def on_step(self, t_s: float, agents: Sequence[AgentState], levels: np.ndarray) -> None:
         self.agents = list(agents)
+        self.world_agents = agents_in_world(self.geometry.line, self.agents)  # where the cameras see them
         self.levels = np.asarray(levels, dtype=np.float64).copy()
         self.changes.update(t_s, self.levels)
         self._placed = None
@@ -225,7 +228,7 @@ class CalibrationRecorder(StreetWatch):
             owner = None
             if np.all(np.isfinite(ground)):
                 for a_i in idx.tolist():
-                    agent = self.agents[a_i]
+                    agent = self.world_agents[a_i]
                     reach_m = LIT_REACH_M if agent.light_on else NEAR_M
                     if agent.object_id not in hits and math.hypot(ground[0] - agent.x_m, ground[1] - agent.y_m) <= reach_m:
                         owner = agent
@@ -250,7 +253,7 @@ class CalibrationRecorder(StreetWatch):
         fast mode draws false alarms at random times, beams where the light is."""
         if not np.all(np.isfinite(ground_m)):
             return None
-        for a in self.agents:
+        for a in self.world_agents:
             if not a.light_on:
                 continue
             ahead_m, across_m = _along_heading(a, ground_m)

@@ -74,7 +74,11 @@ class EnergyCollector(Collector):
 
     def finish(self, t_end_s: float) -> dict[str, Any]:
         self._close_bin(t_end_s)
-        energy = energy_summary(self.lamps, always_on_energy_j(len(self.lamps), self.luminaire, t_end_s))
+        if all(lamp.spec.rated_power_w == self.luminaire.rated_power_w for lamp in self.lamps):
+            always_on_j = always_on_energy_j(len(self.lamps), self.luminaire, t_end_s)
+        else:  # surveyed lamps of their own power: each lamp's always-on
+            always_on_j = sum(always_on_energy_j(1, lamp.spec, t_end_s) for lamp in self.lamps)
+        energy = energy_summary(self.lamps, always_on_j)
         split = ("luminaire_energy_kwh", "standby_energy_kwh", "sensing_energy_kwh")
         return {
             "energy_kwh": energy["energy_kwh"],

@@ -227,7 +227,14 @@ def _grain(x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
 
 
 def ground_reflectance(street: Street, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
-    """Near-infrared reflectance of the ground at world points (x, y), any shape."""
+    """Near-infrared reflectance of the ground at world points (x, y), any shape.
+
+    The street's strips are looked up in street coordinates (s, d) through ``street.centreline``;
+    the grain is a texture on the world ground."""
+    grain = _grain(x_m, y_m)
+    line = getattr(street, "centreline", None)
+    if line is not None and not line.is_straight_x:
+        x_m, y_m = line.to_sd(x_m, y_m)  # from here on x_m is s and y_m is d
     rho = np.full(np.shape(x_m), street.verge_ir_reflectance, dtype=np.float64)
     for sw in street.sidewalks:
         rho[np.abs(y_m - sw.y_center_m) <= sw.width_m / 2] = street.sidewalk_ir_reflectance
@@ -251,4 +258,4 @@ def ground_reflectance(street: Street, x_m: np.ndarray, y_m: np.ndarray) -> np.n
             bars = on_road & (np.abs(x_m - x_c) <= ZEBRA_LENGTH_M / 2)
             bars &= np.mod(y_m - road_lo, 2.0 * ZEBRA_BAR_M) < ZEBRA_BAR_M
             rho[bars] = MARKING_IR_REFLECTANCE
-    return rho * (1.0 + GRAIN_AMPLITUDE * _grain(x_m, y_m))
+    return rho * (1.0 + GRAIN_AMPLITUDE * grain)

@@ -68,7 +68,7 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
                 for k in tqdm(range(n_frames), unit="frame", desc=f"render lamp {lamp} {camera_side}", disable=not progress):
                     t = start_s + k / fps
                     night.run_until(t + 1e-6)  # the physics tick at t included
-                    agents = night.agents
+                    agents = night.street.in_world(night.agents)
                     for a in agents:
                         tracks.setdefault(a.object_id, []).append((a.x_m, a.y_m))
                     frame = renderer.render(t, agents, levels)

@@ -87,6 +87,15 @@ def general_model_path() -> Path:
     return Path(spec.origin).parent / "models" / "general.joblib"
 
 
+def _street_key(scenario: Scenario) -> dict:
+    """The street section as the key has it: the real-street fields (``config.street_layout``) only
+    when given, so a straight street keeps the key (and the shipped models) it had without them."""
+    street = scenario.street
+    unset = {name for name in ("centreline_m", "origin", "source", "side_entries")
+             if getattr(street, name) == type(street).model_fields[name].get_default(call_default_factory=True)}  # fmt: skip
+    return street.model_dump(mode="json", exclude=unset)
+
+
 def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
     """A hash of everything the sensor model depends on (not the traffic's rates, not the seed)."""
     street = build_street(scenario)
@@ -94,7 +103,7 @@ def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
         "version": MODEL_VERSION,
         "cameras": [site.camera.model_dump(mode="json") for site in street.lamps],
         "poles": [[site.x_m, site.y_m, site.pole_height_m] for site in street.lamps],
-        "street": scenario.street.model_dump(mode="json"),
+        "street": _street_key(scenario),
         "environment": scenario.environment.model_dump(mode="json"),
         "dim_level": scenario.lamps.luminaire.dim_level,
         "idle_frame_stride": scenario.simulation.idle_frame_stride,

@@ -92,7 +92,7 @@ def film(night, frames: CameraFrames, controller, lamps: Sequence[Lamp], collect
         yield env.timeout(max(0.0, k / fps - env.now))
         t = env.now
         levels = controller.ctx.lamp_states.levels_at(t)
-        agents = night.agents
+        agents = night.street.in_world(night.agents)  # the cameras look at the world
         for i in np.flatnonzero(schedule.active(k, t, agents, lamps, controller)):
             frame = frames.frame(int(i), k, t, agents, levels)
             detections = controller.on_frame(int(i), t, frame.image)

@@ -83,13 +83,21 @@ def build_controller(night: Night, spec: ControllerSpec, sensors: object | None 
     if spec.hold_s is not None:
         lum = lum.model_copy(update={"hold_s": spec.hold_s})
     initial = 1.0 if controller_cls.initial_level == "full" else lum.dim_level
-    lamps = [Lamp(i, lum, senses=controller_cls.senses, initial_level=initial) for i in range(night.n_lamps)]
+    lamps = [Lamp(i, _own_luminaire(lum, site.rated_power_w), senses=controller_cls.senses, initial_level=initial)
+             for i, site in enumerate(night.street.lamps)]  # fmt: skip
     network = Network(night.env, len(lamps), scenario.network, night.streams["network"])
     ctx = ControlContext(street=night.street, lamps=lamps, luminaire=lum,
                          frame_period_s=1.0 / night.street.lamps[0].camera.fps, rng=night.streams["control"],
                          network=network, start_hour=scenario.start_hour, spec=spec, sensors=sensors,
                          physics_step_s=night.physics_dt_s)  # fmt: skip
     return controller_cls(ctx)
+
+
+def _own_luminaire(lum, rated_power_w: float | None):
+    """``lum`` with a surveyed lamp's own ``rated_power_w`` (W), when it has one that differs."""
+    if rated_power_w is None or rated_power_w == lum.rated_power_w:
+        return lum
+    return lum.model_copy(update={"rated_power_w": rated_power_w})
 
 
 def deliver_messages(night: Night, controller: Controller, lamp_index: int):

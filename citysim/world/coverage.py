@@ -4,8 +4,9 @@ A ground point is *seen* when some lamp camera sees a person standing on it whol
 1.7 m head both inside the frame, through the pinhole projection; the detector drops regions
 cut by the frame border) and within the detector's range (its forward ground distance along
 the camera's heading at most ``range_m``). The walkable and drivable area is the street's lanes
-and sidewalks, sampled on a grid of ``step_m``. For each lamp zone the share of that area seen;
-along the street, the *blind stretches*: x intervals where no point across the lanes and
+and sidewalks, sampled on a grid of ``step_m`` in street coordinates (x read as s along the
+centreline, y as d), placed in the world through ``Street.centreline`` for the cameras. For each lamp
+zone the share of that area seen; along the street, the *blind stretches*: s intervals where no point across the lanes and
 sidewalks is seen. A property of the scenario's geometry alone: no traffic is simulated.
 """
 
@@ -53,9 +54,11 @@ def _bands(street: Street) -> list[tuple[float, float]]:
 
 
 def seen_grid(street: Street, xs_m: np.ndarray, ys_m: np.ndarray, range_m: float) -> np.ndarray:
-    """Boolean (len(xs), len(ys)): is a person standing at (x, y) seen by some camera (``Street.cameras``)?"""
+    """Boolean (len(xs), len(ys)): is a person standing at street coordinates (s, d) = (x, y) seen by
+    some camera (``Street.cameras``)? The grid is placed in the world through ``street.centreline``."""
     gx, gy = np.meshgrid(xs_m, ys_m, indexing="ij")
-    ground = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
+    wx, wy = street.centreline.to_xy(gx.ravel(), gy.ravel())
+    ground = np.column_stack([wx, wy, np.zeros(gx.size)])
     head = ground + [0.0, 0.0, PERSON_HEIGHT_M]
     seen = np.zeros(gx.size, dtype=bool)
     for site in street.cameras:

@@ -8,6 +8,7 @@ sidewalk positions are given by the y of their centre line.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -15,6 +16,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from citysim.config.street import ROAD_STEP_M, VERGE_STEP_M
+from citysim.world.centreline import Centreline
+from citysim.world.placement import agents_in_world
 from detector.camera import CameraModel
 
 if TYPE_CHECKING:
@@ -55,16 +58,33 @@ class StaticObject:
 
 @dataclass(frozen=True)
 class LampSite:
-    """One lamp pole with its luminaire and camera (camera already placed in world)."""
+    """One lamp pole with its luminaire and camera (camera already placed in world).
+
+    ``x_m``, ``y_m``: the pole in the world frame; ``s_m``, ``d_m``: in street coordinates
+    (default: the same, as on the straight street). Zones are s intervals.
+    """
 
     index: int
     x_m: float
     y_m: float
     pole_height_m: float
     camera: CameraModel  # x_m, y_m, yaw_deg set to this pole
-    zone_start_m: float  # the stretch of street (x) this lamp is responsible for
+    zone_start_m: float  # the stretch of street (s) this lamp is responsible for
     zone_end_m: float
     back_camera: CameraModel | None = None  # a second camera on the pole (``lamps.camera.back_heading_deg``)
+    s_m: float | None = None
+    d_m: float | None = None
+    rated_power_w: float | None = None  # this lamp's luminaire power (None: the scenario's luminaire)
+
+    @property
+    def along_m(self) -> float:
+        """The pole's s along the street, m."""
+        return self.x_m if self.s_m is None else self.s_m
+
+    @property
+    def offset_m(self) -> float:
+        """The pole's offset d to the left of the centreline, m."""
+        return self.y_m if self.d_m is None else self.d_m
 
 
 @dataclass(frozen=True)
@@ -78,6 +98,11 @@ class CameraSite:
 
 @dataclass(frozen=True)
 class Street:
+    """The street in street coordinates (s along ``centreline`` from 0 to ``length_m``, d to its left;
+    lanes, sidewalks, zones, crossings, side entries) with what stands in the world frame (x east,
+    y north: the lamps' ``x_m``/``y_m``, their cameras, the scenery). ``centreline`` converts; on the
+    straight street (the default) s = x and d = y. Design: docs/design/streets.md."""
+
     length_m: float
     lanes: tuple[Lane, ...]
     sidewalks: tuple[Sidewalk, ...]
@@ -90,6 +115,12 @@ class Street:
     crossings_x_m: tuple[
         float, ...
     ] = ()  # where pedestrians prefer to cross (the renderer may mark them)
+    centreline: Centreline | None = None  # None: the straight street along +x
+    side_entries: tuple = ()  # config.street_layout.SideEntrySpec: where road users join mid-street
+
+    def __post_init__(self) -> None:
+        if self.centreline is None:
+            object.__setattr__(self, "centreline", Centreline.straight(self.length_m))
 
     # cached: a street never changes, and camera controllers ask for the camera's lamp at every trigger
     @cached_property
@@ -102,6 +133,10 @@ class Street:
         back = [site for site in self.lamps if site.back_camera is not None]
         n = len(own)
         return tuple(own + [CameraSite(n + k, site.index, site.back_camera) for k, site in enumerate(back)])
+
+    def in_world(self, agents):
+        """Agent snapshots (street coordinates) placed in the world frame (``world.placement``)."""
+        return agents_in_world(self.centreline, agents)
 
     @cached_property
     def camera_lamps(self) -> tuple[int, ...]:
@@ -159,23 +194,10 @@ def build_street(scenario: Scenario, rng: np.random.Generator | None = None) -> 
     if rng is None:
         seed = spec.scenery.seed if spec.scenery.seed is not None else scenario.seed
         rng = np.random.default_rng([seed, SCENERY_STREAM])
-    base = lamps.camera_model
+    line = Centreline(spec.centreline_points_m)
     sites = tuple(
-        LampSite(
-            index=i,
-            x_m=x,
-            y_m=lamps.y_m,
-            pole_height_m=lamps.pole_height_m,
-            camera=base.placed(x_m=x, y_m=lamps.y_m) if lamps.camera.headings_deg is None
-            else base.placed(x_m=x, y_m=lamps.y_m, yaw_deg=lamps.heading_of(i)),
-            zone_start_m=z0,
-            zone_end_m=z1,
-            back_camera=None if lamps.camera.back_heading_deg is None
-            else base.placed(x_m=x, y_m=lamps.y_m, yaw_deg=lamps.camera.back_heading_deg),
-        )
-        for i, (x, (z0, z1)) in enumerate(
-            zip(lamps.positions_x_m, lamps.zones(spec.length_m), strict=True)
-        )
+        _lamp_site(lamps, line, i, s, zone)
+        for i, (s, zone) in enumerate(zip(lamps.positions_x_m, lamps.zones(spec.length_m), strict=True))
     )
     street = Street(
         length_m=spec.length_m,
@@ -184,9 +206,55 @@ def build_street(scenario: Scenario, rng: np.random.Generator | None = None) -> 
         lamps=sites,
         kerb_height_m=spec.kerb_height_m,
         crossings_x_m=tuple(spec.crossings_x_m),
+        centreline=line,
+        side_entries=tuple(spec.side_entries),
     )
-    poles = tuple(StaticObject("pole", s.x_m, s.y_m, 0.2, 0.2, s.pole_height_m, 0.4) for s in sites)
-    return replace(street, scenery=poles + _place_scenery(street, spec.scenery, poles, rng))
+    poles = tuple(StaticObject("pole", s.along_m, s.offset_m, 0.2, 0.2, s.pole_height_m, 0.4) for s in sites)
+    placed = poles + _place_scenery(street, spec.scenery, poles, rng)  # in street coordinates
+    if not line.is_straight_x:
+        placed = tuple(_in_world(obj, line) for obj in placed)
+    return replace(street, scenery=placed)
+
+
+def _in_world(obj: StaticObject, line: Centreline) -> StaticObject:
+    """A scenery object placed in street coordinates (x_m = s, y_m = d) moved to the world frame.
+
+    Footprints stay boxes along the world axes (the renderer's scenery boxes are axis-aligned):
+    length and width swap where the street runs closer to north-south than to east-west.
+    """
+    x_m, y_m = line.to_xy(obj.x_m, obj.y_m)
+    heading = line.heading_rad(obj.x_m)
+    if abs(math.sin(heading)) > abs(math.cos(heading)):
+        return replace(obj, x_m=x_m, y_m=y_m, length_m=obj.width_m, width_m=obj.length_m)
+    return replace(obj, x_m=x_m, y_m=y_m)
+
+
+def _lamp_site(lamps, line: Centreline, index: int, s_m: float, zone: tuple[float, float]) -> LampSite:
+    """Lamp ``index`` at ``s_m`` on ``line``: the pole in the world and its cameras looking along the
+    local street direction turned by the camera heading (or the pole's own world heading)."""
+    d_m, height_m, power_w, world_heading_deg = lamps.pole_fields(index)
+    x_m, y_m = line.to_xy(s_m, d_m)
+    base = lamps.camera_model
+    if height_m != lamps.pole_height_m and lamps.camera.height_m is None:
+        base = base.placed(height_m=height_m)
+    street_deg = math.degrees(line.heading_rad(s_m))
+
+    def look(heading_deg: float):
+        return heading_deg if line.is_straight_x else street_deg + heading_deg
+
+    if world_heading_deg is not None:
+        camera = base.placed(x_m=x_m, y_m=y_m, yaw_deg=world_heading_deg)
+    elif lamps.camera.headings_deg is None and line.is_straight_x:
+        camera = base.placed(x_m=x_m, y_m=y_m)
+    else:
+        camera = base.placed(x_m=x_m, y_m=y_m, yaw_deg=look(lamps.heading_of(index)))
+    back = lamps.camera.back_heading_deg
+    return LampSite(
+        index=index, x_m=x_m, y_m=y_m, pole_height_m=height_m, camera=camera,
+        zone_start_m=zone[0], zone_end_m=zone[1],
+        back_camera=None if back is None else base.placed(x_m=x_m, y_m=y_m, yaw_deg=look(back)),
+        s_m=s_m, d_m=d_m, rated_power_w=power_w,
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)

@@ -32,6 +32,7 @@ from citysim.config.traffic import TrafficClassSpec
 from citysim.world.agents import AgentTraits, draw_agent
 from citysim.world.geometry import Leg, Route
 from citysim.world.physics import World
+from citysim.world.side_entries import side_route
 from citysim.world.street import Lane, Sidewalk, Street
 
 __all__ = ["ROUTE_PLANNERS", "arrivals", "draw_arrival", "start_traffic"]
@@ -198,8 +199,12 @@ ROUTE_PLANNERS: dict[str, Callable[..., tuple[AgentTraits, Route]]] = {
 def draw_arrival(
     street: Street, spec: TrafficClassSpec, rng: np.random.Generator, *, night: bool = True
 ) -> tuple[AgentTraits, Route]:
-    """One arriving agent of ``spec``'s class: its looks, speed and route."""
-    return ROUTE_PLANNERS[AGENT_KINDS[spec.kind].route](street, spec, rng, night)
+    """One arriving agent of ``spec``'s class: its looks, speed and route (joining or leaving at a
+    side entry for the street's share of its class, ``world.side_entries``)."""
+    traits, route = ROUTE_PLANNERS[AGENT_KINDS[spec.kind].route](street, spec, rng, night)
+    if street.side_entries:
+        route = side_route(street, spec.kind, route, rng)
+    return traits, route
 
 
 def arrivals(

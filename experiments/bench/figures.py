@@ -323,6 +323,12 @@ def bench_traffic() -> dict:
     return bench_world()
 
 
+def bench_curved_street() -> dict:
+    from experiments.bench.curved import bench_curved
+
+    return bench_curved()
+
+
 def bench_year_fast() -> dict:
     from experiments.bench.year import bench_year
 
@@ -337,6 +343,9 @@ def bench_city() -> dict:
 
 SECTIONS = (bench_detector, bench_render, bench_sim, bench_traffic, bench_sweep, bench_night_sample, bench_shared_frames,
             bench_night_fast, bench_night_fast_whole, bench_year_fast, bench_city)
+
+#: the straight against the curved street (issue 33), after the other sections
+SECTIONS += (bench_curved_street,)
 
 
 def main(argv: list[str] | None = None) -> int:

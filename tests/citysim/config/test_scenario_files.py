@@ -26,12 +26,12 @@ def test_scenario_loads_and_builds(path):
     # zones tile the lamp chain in lamp order, within the street; an end lamp reaches half a
     # spacing beyond itself (what lies further is an approach lit by other streets)
     first, last = street.lamps[0], street.lamps[-1]
-    assert 0.0 <= first.zone_start_m <= first.x_m and last.x_m <= last.zone_end_m <= street.length_m
+    assert 0.0 <= first.zone_start_m <= first.along_m and last.along_m <= last.zone_end_m <= street.length_m
     if len(street.lamps) > 1:
-        assert first.x_m - first.zone_start_m == pytest.approx(min(first.x_m, (street.lamps[1].x_m - first.x_m) / 2))
+        assert first.along_m - first.zone_start_m == pytest.approx(min(first.along_m, (street.lamps[1].along_m - first.along_m) / 2))
     for a, b in zip(street.lamps[:-1], street.lamps[1:], strict=True):
         assert a.zone_end_m == b.zone_start_m
-        assert a.zone_start_m <= a.x_m <= a.zone_end_m
+        assert a.zone_start_m <= a.along_m <= a.zone_end_m
     for lamp in street.lamps:
         cam = lamp.camera
         assert (cam.x_m, cam.y_m) == (lamp.x_m, lamp.y_m)
