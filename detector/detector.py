@@ -148,6 +148,7 @@ class Detector:
         equalise_tiles_only: bool = False,
         tracking: bool = True,
         tracks: TrackSet | None = None,
+        border_filter: bool = True,
     ) -> None:
         if not isinstance(camera, CameraModel):
             raise TypeError(f"Detector camera must be a CameraModel, got {type(camera).__name__}")
@@ -181,6 +182,7 @@ class Detector:
         if self._rows_proba is None and proba_rows is not None:
             self._rows_proba = lambda feats: np.array(proba_rows(feats.tolist()))
         self.max_distance_m = float(max_distance_m)
+        self.border_filter = bool(border_filter)
         self.target_threshold = float(target_threshold)
         self.division = division
         load_compiled_splits(division)
@@ -193,11 +195,8 @@ class Detector:
             params.dilate_iterations,
             equalise_tiles_only,
         )
-        self.crop: Crop = (
-            self.band
-            if crop_to_range
-            else full_frame(camera.height_px, camera.width_px, params.clahe_tile_px)
-        )
+        self.crop: Crop = self.band if crop_to_range else full_frame(camera.height_px, camera.width_px,
+                                                                     params.clahe_tile_px)
         self.segmenter = Segmenter(params, camera.fps, self.crop)
         # per-camera constants, computed once rather than every frame
         self._frame_shape = (camera.height_px, camera.width_px)
