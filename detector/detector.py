@@ -45,7 +45,7 @@ import numpy as np
 
 from detector.camera import CameraModel
 from detector.confirm import Tracker
-from detector.divide import DivisionParams, divide_rows
+from detector.divide import MIN_SPOT_BRIGHTENING_DN, DivisionParams, divide_rows
 from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
 from detector.ghosts import StillRegions
 from detector.roi import Crop, full_frame, range_crop
@@ -242,6 +242,14 @@ class Detector:
             )
         return any(d.p_target >= threshold for d in detections)
 
+    def _lit(self, object_box_px: list[int], spot_box_px: list[int]) -> bool:
+        """Is this spot part of a region a light spot: brighter than the ground was and than the
+        object part? Division only then."""
+        spot, body = self.segmenter.brightness_dn(spot_box_px), self.segmenter.brightness_dn(object_box_px)
+        if spot is None or body is None:
+            return False
+        return spot[0] - max(spot[1], body[0]) >= MIN_SPOT_BRIGHTENING_DN
+
     def _nothing(self) -> list[Detection]:
         """A frame with no region to classify: the tracks age (or the box tracker sees nothing)."""
         if self.tracks is not None:
@@ -308,7 +316,7 @@ class Detector:
             edge = regions.unusable.tolist()
         rows = self._geometry.rows(boxes, areas)
         divided, _ = divide_rows(
-            self._geometry, regions.contours, boxes, areas, rows, self.division, self._divide_within_m
+            self._geometry, regions.contours, boxes, areas, rows, self.division, self._divide_within_m, self._lit
         )
         # a region cut by the border (or the crop) is classified only as the object divided off
         # it, when that object is clear of the edge (the light spot was the part that reached it)
