@@ -65,7 +65,7 @@ _GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
 
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
                  max_width_px: int = 424, max_distance_m: float = 25.0, *, progress: bool = True,
-                 annotated: bool = True, full_frame: bool = False, border_filter: bool = False) -> dict:
+                 annotated: bool = True, full_frame: bool = False, border_filter: bool = True) -> dict:
     """Run the detector over a video and write ``out_dir``; returns the summary (also in summary.json).
 
     Frames wider than ``max_width_px`` are processed scaled down; every box written or drawn
@@ -75,7 +75,8 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
     detecting in it). ``full_frame``: segment whole frames, not only the band where a target
     within range can appear (``detector.roi``; for comparison, or a camera whose range covers
     the whole frame anyway). ``border_filter``: drop every region cut by the frame's edge, as
-    the paper does (default: keep those that continue a track or whose visible part fits a class).
+    the paper does (the default); False: keep those cut by the left, right or top edge that
+    continue a track, measured from their visible part.
     """
     from detector.detector import Detector
 
@@ -249,9 +250,10 @@ def add_detect_arguments(p: argparse.ArgumentParser) -> None:
                    help="write no annotated.mp4 (only the CSVs and summary.json, as a lamp's own computer would)")
     p.add_argument("--full-frame", action="store_true",
                    help="segment whole frames, not only the band where a target within --max-distance-m can appear")
-    p.add_argument("--border-filter", action="store_true",
-                   help="drop every region cut by the frame's edge, as the paper does (without it such a region "
-                        "is kept when it continues a track or its visible part fits a class)")
+    p.add_argument("--keep-edge-regions", action="store_true",
+                   help="keep a region cut by the frame's left, right or top edge when it continues a track "
+                        "(measured from its visible part); default: drop every region cut by the edge, as the "
+                        "paper does")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -285,7 +287,7 @@ def run_detect(args: argparse.Namespace) -> int:
         check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
         summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
                                args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video,
-                               full_frame=args.full_frame, border_filter=args.border_filter)
+                               full_frame=args.full_frame, border_filter=not args.keep_edge_regions)
     except USER_ERRORS as exc:
         print(f"error: {exc}", file=sys.stderr)
         return USAGE_EXIT

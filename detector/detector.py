@@ -23,8 +23,9 @@ same detections (``tests/detector/test_detector.py`` checks this against the
 straightforward array computation).
 
 The segmenter works on the band of rows where a target within range can appear
-(``detector.roi``; ``crop_to_range=False``: the whole frame). Regions touching
-the frame border, or cut by the band's edge, are not classified (their shape is
+(``detector.roi``; ``crop_to_range=False``: the whole frame). With ``border_filter=False``
+regions cut only by the frame's left, right or top edge are classified from their visible
+part. Otherwise regions touching the frame border, or cut by the band's edge, are not classified (their shape is
 cut) unless division cuts an object clear of the edge off them (a car whose
 headlight beam on the road reaches the frame's edge);
 neither are regions with no ground point (bottom at or above the horizon) or
@@ -118,6 +119,11 @@ def detection_from_fields(fields: dict) -> Detection:
     return detection
 
 
+def _overlap(a: Sequence[int], b: Sequence[int]) -> bool:
+    """Whether two (x, y, w, h) boxes share a pixel."""
+    return a[0] < b[0] + b[2] and b[0] < a[0] + a[2] and a[1] < b[1] + b[3] and b[1] < a[1] + a[3]
+
+
 class Detector:
     """Per-camera detector: owns the background model and the tracker.
 
@@ -131,7 +137,10 @@ class Detector:
     now; equalised values 1 DN apart on about 0.1 % of the pixels, so now and then a box a pixel
     or two off the full frame's). ``tracking``: decide per track (``detector.tracks``, the
     default; ``tracks`` a configured ``TrackSet`` or None for the default one) or per frame
-    (False: the paper's path, ``tracker`` its light box tracker).
+    (False: the paper's path, ``tracker`` its light box tracker). ``border_filter``: drop every
+    region cut by the frame's edge, as the paper does (the default here; ``python -m detector``
+    passes False); False: a region cut only by the left, right or top edge (its bottom, so its
+    distance, in view) is measured from its visible part and classified, and its track decides.
     """
 
     def __init__(
@@ -250,6 +259,22 @@ class Detector:
             return False
         return spot[0] - max(spot[1], body[0]) >= MIN_SPOT_BRIGHTENING_DN
 
+    def _keep_side_cut(self, regions: Regions, boxes: list, edge: list) -> None:
+        """Un-flag (in ``edge``) the regions cut only by the frame's left, right or top edge that
+        continue a track (overlap a live track's last box): their bottom row, so their distance,
+        is seen, their visible part is measured and classified as it is (a width or height cut
+        short by the edge is a lower bound), and the track they continue decides. Regions cut by the frame's bottom (their feet unseen: no distance) or by the
+        band's edge stay out."""
+        bottom = self._frame_shape[0]
+        touches, cut = regions.touches_border.tolist(), regions.cut_by_crop
+        cut = [False] * len(touches) if cut is None else cut.tolist()
+        # a region at the edge continues a track: it overlaps a live track's last box
+        live = [] if self.tracks is None else [t.box_px for t in self.tracks.tracks]
+        for i, box in enumerate(boxes):
+            if edge[i] and touches[i] and not cut[i] and box[1] + box[3] < bottom and any(
+                    _overlap(box, last) for last in live):  # fmt: skip
+                edge[i] = False
+
     def _nothing(self) -> list[Detection]:
         """A frame with no region to classify: the tracks age (or the box tracker sees nothing)."""
         if self.tracks is not None:
@@ -321,6 +346,8 @@ class Detector:
         # a region cut by the border (or the crop) is classified only as the object divided off
         # it, when that object is clear of the edge (the light spot was the part that reached it)
         if any(edge):
+            if not self.border_filter:
+                self._keep_side_cut(regions, boxes, edge)
             crop = self.crop
             left, top, right, bottom = crop.left_px, crop.top_px, crop.right_px, crop.bottom_px
             for i in divided:

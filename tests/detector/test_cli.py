@@ -450,3 +450,27 @@ def test_camera_file_typo_suggests_the_field(tmp_path):
     cam.write_text(yaml.safe_dump({**{k: v for k, v in SCENE_B.items() if k != "focal_mm"}, "focal_mn": 0.73}))
     with pytest.raises(Exception, match=r"focal_mn: unknown field; did you mean focal_mm\?"):
         CameraModel.from_yaml(cam)
+
+
+def test_a_walker_cut_by_the_frames_side_is_kept_with_keep_edge_regions(tmp_path, capsys):
+    """A walker crossing out of the frame's side: with --keep-edge-regions his regions cut by the
+    edge are classified from their visible part (bottom row in view: distance known) and stay on
+    his track; by default they are dropped as the paper does."""
+    camera = CameraModel(**SCENE_B)
+    (tmp_path / "cam.yaml").write_text(yaml.safe_dump(SCENE_B))
+    write_walker_video(tmp_path / "walker.mp4", camera, FORWARD_M, n_frames=120)  # walks out at the right
+    outs = {flag: tmp_path / flag for flag in ("kept", "filtered")}
+    for flag, out in outs.items():
+        extra = ["--keep-edge-regions"] if flag == "kept" else []
+        assert main([str(tmp_path / "walker.mp4"), "--camera", str(tmp_path / "cam.yaml"), "--out", str(out),
+                     "--no-video", "--no-progress", *extra]) == 0
+    kept, filtered = (read_rows(out / "detections.csv") for out in outs.values())
+    right = SCENE_B["width_px"]
+    at_edge = [r for r in kept if int(r["x"]) + int(r["w"]) >= right]
+    assert at_edge, "the walker should reach the frame's right edge"
+    assert not [r for r in filtered if int(r["x"]) + int(r["w"]) >= right]
+    # measured from the visible part: the distance (bottom row) is right, and his track keeps him
+    assert np.median([float(r["distance_m"]) for r in at_edge]) == pytest.approx(FORWARD_M, rel=0.1)
+    assert sum(r["target"] == "1" for r in at_edge) >= 0.5 * len(at_edge)
+    summaries = [json.loads((out / "summary.json").read_text()) for out in outs.values()]
+    assert [s["border_filter"] for s in summaries] == [False, True]

@@ -39,7 +39,7 @@ def test_citysim_detect_takes_every_option_of_the_detector_cli():
     commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
     mine, theirs = _options(commands["detect"]), _options(_detect_parser())
     assert mine == theirs
-    assert {"no_video", "full_frame", "border_filter", "model", "max_width"} <= set(mine)
+    assert {"no_video", "full_frame", "keep_edge_regions", "model", "max_width"} <= set(mine)
 
 
 def test_citysim_detect_runs_with_no_video(walker, tmp_path, capsys):
