@@ -84,3 +84,27 @@ def test_a_rendered_street_calibrates_its_camera(tmp_path):
     assert (camera.width_px, camera.height_px) == (320, 240)
     assert camera.fx_px == pytest.approx(0.73 * 320 / 0.7, rel=1e-3)
     assert "walkers" in out.read_text()
+
+
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        (["--hfov-deg", "50", "--focal-mm", "3.6"], ["--focal-mm/--sensor-w-mm/--hfov-deg", "not both or neither"]),
+        ([], ["--focal-mm/--sensor-w-mm/--hfov-deg", "--hfov-deg H"]),
+        (["--focal-mm", "3.6"], ["--focal-mm/--sensor-w-mm: give both"]),
+        (["--hfov-deg", "200"], ["argument --hfov-deg", "<= 179"]),
+    ],
+)
+def test_calibrate_refuses_a_lens_it_cannot_use_in_one_line(tmp_path, capsys, args, needles):
+    from detector.__main__ import main
+
+    try:
+        code = main(["calibrate", str(tmp_path / "v.mp4"), "--out", str(tmp_path / "cam.yaml"), *args])
+    except SystemExit as exc:  # argparse's own refusal
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for needle in needles:
+        assert needle in err, err
+    assert not (tmp_path / "cam.yaml").exists()
