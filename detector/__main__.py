@@ -1,22 +1,25 @@
-"""Command line: run the detector on a real video, or train a camera-specific model.
+"""Command line: run the detector on a video, calibrate a camera from its passers-by, or train a model.
 
     python -m detector VIDEO --camera CAM.yaml --out DIR [--model M.joblib] [--max-width 424]
+    python -m detector calibrate VIDEO (--focal-mm F --sensor-w-mm W | --hfov-deg H) --out CAM.yaml
     python -m detector train --camera CAM.yaml --out MODEL.joblib [--seed 0]
 
 Writes DIR/detections.csv (one row per classified region, noise included; boxes in the
-video's own pixels; each with its track: id, class, pooled P(target), ground position and
-speed), DIR/tracks.csv (one row per track: first and last frame, class, frames seen, mean
-speed, why it was not a target), DIR/annotated.mp4 (the video at its own size with the boxes,
-track ids and classes drawn; not with --no-video) and DIR/summary.json (counts, and the size the frames were
-processed at). User errors print one
-line naming the argument, file or field and exit with code 2; nothing half-written is left
-behind, and an --out that cannot or should not be written is refused before any frame.
+video's own pixels; ``target`` 1/0 is what a lamp would act on, the track's decision where
+there is a track; ``frame_cls``/``frame_p_target`` are the per-frame classifier's output;
+``detector.detections_csv``), DIR/tracks.csv (one row per track: first and last frame, class,
+frames seen, mean speed, why it was not a target), DIR/annotated.mp4 (the video at its own size
+with each region's decision drawn; not with --no-video) and DIR/summary.json (counts of the
+CSV's rows, and the size the frames were processed at). A model trained for a camera outside
+the general model's range is cached (``detector.model_cache``). User errors print one line
+naming the argument, file or field and exit with code 2; Ctrl-C prints one line and exits 130
+(SIGTERM: 143); nothing half-written is left behind, and an --out that cannot or should not be
+written is refused before any frame.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import sys
@@ -28,7 +31,14 @@ from tqdm import tqdm
 from detector.camera import CameraError, CameraModel
 from detector.classes import GENERAL_CAMERA_HEIGHT_M, GENERAL_MIN_VIEW_RANGE_M, GENERAL_TILT_DEG
 from detector.cliargs import USAGE_EXIT, Parser, number
-from detector.outdir import check_output_dir, check_output_file, exit_on_terminate, staged_output
+from detector.detections_csv import CSV_HEADER, DetectionRows, write_tracks_csv
+from detector.outdir import (
+    TERMINATED_EXIT,
+    check_output_dir,
+    check_output_file,
+    exit_on_terminate,
+    staged_output,
+)
 from detector.video import (
     FrameScale,
     VideoError,
@@ -38,12 +48,13 @@ from detector.video import (
     source_and_gray_frames,
 )
 
-CSV_HEADER = ["frame", "x", "y", "w", "h", "cls", "p_target", "width_m", "height_m", "area_m2", "distance_m",
-              "track_id", "track_cls", "track_p_target", "ground_x_m", "ground_y_m", "speed_mps"]
+__all__ = ["CSV_HEADER", "add_detect_arguments", "detect_video", "main", "run_detect", "write_tracks_csv"]
 #: What an output folder of this command holds; an earlier one may be replaced by a new run.
 DETECT_OUTPUTS = ("detections.csv", "tracks.csv", "annotated.mp4", "summary.json")
 USER_ERRORS = (CameraError, VideoError, FileNotFoundError, ValueError)
 MIN_MAX_WIDTH_PX = 64
+#: exit status after Ctrl-C (128 + SIGINT), as shells report it
+INTERRUPTED_EXIT = 130
 #: Training a model for one camera takes about this long on one core of a small machine, s
 #: (5 classes x DEFAULT_N_PER_CLASS synthetic silhouettes and a logistic regression).
 CAMERA_TRAINING_S = 7
@@ -54,7 +65,7 @@ _GENERAL_TILTS = "{:g}-{:g} deg tilt".format(*GENERAL_TILT_DEG)
 
 def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path | None = None,
                  max_width_px: int = 424, max_distance_m: float = 25.0, *, progress: bool = True,
-                 annotated: bool = True, full_frame: bool = False) -> dict:
+                 annotated: bool = True, full_frame: bool = False, border_filter: bool = True) -> dict:
     """Run the detector over a video and write ``out_dir``; returns the summary (also in summary.json).
 
     Frames wider than ``max_width_px`` are processed scaled down; every box written or drawn
@@ -63,7 +74,9 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
     less time on the development clips (encoding the video at its own size costs more than
     detecting in it). ``full_frame``: segment whole frames, not only the band where a target
     within range can appear (``detector.roi``; for comparison, or a camera whose range covers
-    the whole frame anyway).
+    the whole frame anyway). ``border_filter``: drop every region cut by the frame's edge, as
+    the paper does (the default); False: keep those cut by the left, right or top edge that
+    continue a track, measured from their visible part.
     """
     from detector.detector import Detector
 
@@ -77,12 +90,16 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
     cam = camera_for_video(camera, info, max_width_px, camera_source=str(camera_file))
     scale = frame_scale(info, max_width_px)
     model, model_name = _choose_model(cam, camera_file, model_path)
-    detector = Detector(cam, model=model, max_distance_m=max_distance_m, crop_to_range=not full_frame)
+    detector = Detector(cam, model=model, max_distance_m=max_distance_m, crop_to_range=not full_frame,
+                        border_filter=border_filter)
     detector.tracks.keep_ended = True  # for tracks.csv
     summary = {"video": str(video), "camera": str(camera_file), "model": model_name,
                "boxes": "x, y, w, h in the video's own pixels (OpenCV boundingRect: columns x .. x+w-1)",
+               "answer": "detections.csv's target column (1: a lamp acts on it; the track's decision where "
+                         "there is a track); frame_cls is the per-frame classifier's output, not the answer",
                "processing": scale.as_dict(), "max_distance_m": max_distance_m, "fps": info.fps,
                "annotated_video": "annotated.mp4" if annotated else None, "full_frame": full_frame,
+               "border_filter": border_filter,
                # what was segmented, in the processed frame's pixels (half-open): the band, or everything
                "segmented_px": {"rows": [detector.crop.top_px, detector.crop.bottom_px],
                                 "columns": [detector.crop.left_px, detector.crop.right_px]}}
@@ -106,22 +123,27 @@ def _choose_model(cam: CameraModel, camera_file: Path, model_path: Path | None):
     if gap is None:
         return default_model(), "general"
     # a camera unlike those the general model was trained on: a model for this very camera is
-    # a few seconds away and clearly better there
-    print(f"note: {camera_file}: {gap}; training a model for this camera (~{CAMERA_TRAINING_S} s on an idle machine; "
-          "save one with 'python -m detector train' to skip this)", file=sys.stderr)
-    # the training code loads only here, for a camera the general model does not cover
-    from detector.train.fit import train_camera_model
+    # a few seconds away (once: it is cached) and clearly better there
+    from detector.model_cache import cached_camera_model
+    from detector.train.fit import DEFAULT_N_PER_CLASS, train_camera_model
 
-    return train_camera_model(cam), f"trained for {camera_file} (seed 0)"
+    def train(camera: CameraModel):
+        print(f"note: {camera_file}: {gap}; training a model for this camera (~{CAMERA_TRAINING_S} s on an idle "
+              "machine, once: it is cached)", file=sys.stderr)
+        return train_camera_model(camera)
+
+    model, path, reused = cached_camera_model(cam, train, seed=0, n_per_class=DEFAULT_N_PER_CLASS)
+    if reused:
+        print(f"note: {camera_file}: {gap}; reusing the model trained for this camera: {path}", file=sys.stderr)
+    return model, f"trained for {camera_file} (seed 0; cached as {path})"
 
 
 def _detect_frames(detector, info, scale: FrameScale, stage: Path, progress: bool, annotated: bool) -> dict:
     """Detect in every frame: detections.csv and (``annotated``) annotated.mp4 at the video's size
-    into ``stage``."""
+    into ``stage``; returns the counts of detections.csv's rows."""
     from detector.draw import draw_detections
 
-    counts: dict[str, int] = {}
-    frames_with_target = n_frames = 0
+    n_frames = 0
     writer = None
     if annotated:
         writer = cv2.VideoWriter(str(stage / "annotated.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), info.fps,
@@ -130,56 +152,20 @@ def _detect_frames(detector, info, scale: FrameScale, stage: Path, progress: boo
             raise VideoError(f"{stage.parent}: OpenCV cannot write an mp4 video here")
     try:
         with open(stage / "detections.csv", "w", newline="") as fh:
-            rows = csv.writer(fh)
-            rows.writerow(CSV_HEADER)
+            rows = DetectionRows(fh, detector.target_threshold)
             bar = tqdm(source_and_gray_frames(info, scale.processing_px), total=info.frame_count or None,
                        unit="frame", desc=f"detect {info.path.name}", disable=not progress)
             for n_frames, (source, gray) in enumerate(bar, start=1):
                 detections = detector.process(gray)
                 boxes = [scale.to_source_box(det.box_px) for det in detections]
-                for det, (x, y, w, h) in zip(detections, boxes, strict=True):
-                    wm, hm, am, dm = det.features[:4]
-                    rows.writerow([n_frames - 1, x, y, w, h, det.cls, f"{det.p_target:.4f}",
-                                   f"{wm:.3f}", f"{hm:.3f}", f"{am:.3f}", f"{dm:.3f}", det.track_id, det.track_cls,
-                                   _fixed(det.track_p_target, 4), _fixed(det.ground_x_m, 3),
-                                   _fixed(det.ground_y_m, 3), _fixed(det.speed_mps, 3)])
-                    counts[det.cls] = counts.get(det.cls, 0) + 1
-                frames_with_target += detector.is_target(detections)
+                rows.write_frame(n_frames - 1, detections, boxes)
                 if writer is not None:
-                    writer.write(draw_detections(source, detections, boxes_px=boxes))
+                    writer.write(draw_detections(source, detections, boxes_px=boxes,
+                                                 target_threshold=detector.target_threshold))
     finally:
         if writer is not None:
             writer.release()
-    return {"frames": n_frames, "frames_with_target": frames_with_target, "regions_per_class": counts}
-
-
-def _fixed(value: float | None, digits: int) -> str:
-    """A number with ``digits`` decimals, or an empty cell for None (not known yet)."""
-    return "" if value is None else f"{value:.{digits}f}"
-
-
-TRACKS_HEADER = ["track_id", "first_frame", "last_frame", "frames_seen", "cls", "target_frames", "mean_speed_mps",
-                 "reject_reason", "merged_into"]
-
-
-def write_tracks_csv(tracks, path: Path) -> dict[str, int]:
-    """One row per track of the video (``detector.tracks``), by id; returns tracks per class.
-
-    ``cls`` is the class the track had most often while it was a target, 'noise' if it never
-    was one; ``reject_reason`` then says why (the reason of most of its frames);
-    ``merged_into`` names the track it was joined to as a fragment.
-    """
-    counts: dict[str, int] = {}
-    with open(path, "w", newline="") as fh:
-        out = csv.writer(fh)
-        out.writerow(TRACKS_HEADER)
-        for t in sorted([*tracks.ended, *tracks.tracks], key=lambda t: t.track_id):
-            cls = max(t.target_classes, key=t.target_classes.get) if t.target_classes else "noise"
-            reason = "" if t.target_classes else max(t.reasons, key=t.reasons.get, default="")
-            out.writerow([t.track_id, t.first_frame, t.last_frame, t.sightings, cls, t.target_frames,
-                          _fixed(t.mean_speed_mps, 3), reason, "" if t.merged_into is None else t.merged_into])
-            counts[cls] = counts.get(cls, 0) + 1
-    return counts
+    return {"frames": n_frames, **rows.counts()}
 
 
 def view_range_m(camera: CameraModel) -> float:
@@ -233,21 +219,28 @@ def train_camera(camera_file: Path | None, out_path: Path, seed: int = 0) -> Pat
 
 
 USAGE = """python -m detector VIDEO --camera CAM.yaml --out DIR [options]
+       python -m detector calibrate VIDEO (--focal-mm F --sensor-w-mm W | --hfov-deg H) --out CAM.yaml
        python -m detector train [--camera CAM.yaml] --out MODEL.joblib [--seed N]"""
+#: what to do without a camera file
+HOW_TO_GET_A_CAMERA = ("a camera file (height_m, tilt_deg, lens) is needed to measure objects; let the detector "
+                       "estimate one from people walking by: 'python -m detector calibrate VIDEO --hfov-deg H "
+                       "--out camera.yaml' (or --focal-mm F --sensor-w-mm W from the lens datasheet), or write one "
+                       "by hand (see scenarios/cameras/)")
 
 
-def _detect_parser() -> argparse.ArgumentParser:
-    p = Parser(prog="python -m detector", usage=USAGE, description="Detect and classify moving objects in a "
-               "video (pedestrian, group, cyclist, vehicle, noise). 'python -m detector train --help' trains "
-               "a model for one camera.")
+def add_detect_arguments(p: argparse.ArgumentParser) -> None:
+    """Every option of ``python -m detector VIDEO``, on ``p``: the one definition both that
+    command and ``citysim detect`` use (``run_detect`` runs the parsed arguments)."""
     p.add_argument("video", type=Path, help="video file (any format OpenCV decodes)")
-    p.add_argument("--camera", type=Path, required=True, help="camera YAML: CameraModel fields (see scenarios/cameras/)")
+    p.add_argument("--camera", type=Path, default=None,
+                   help="camera YAML: CameraModel fields (see scenarios/cameras/); none yet? "
+                        "'python -m detector calibrate' estimates one from the video")
     p.add_argument("--out", type=Path, required=True,
                    help="output folder for detections.csv, tracks.csv, annotated.mp4 and summary.json: new, empty, or an "
                         "earlier output of this command (replaced)")
     p.add_argument("--model", type=Path, default=None,
-                   help="classifier .joblib (default: the general model, or one trained on the spot for a "
-                        "camera outside its range)")
+                   help="classifier .joblib (default: the general model, or one trained for a camera outside its "
+                        "range, cached after the first run)")
     p.add_argument("--max-width", type=number(int, ge=MIN_MAX_WIDTH_PX, unit="px"), default=424,
                    help="process frames scaled down to at most this width, px (boxes are written in the "
                         "video's own pixels)")
@@ -257,7 +250,19 @@ def _detect_parser() -> argparse.ArgumentParser:
                    help="write no annotated.mp4 (only the CSVs and summary.json, as a lamp's own computer would)")
     p.add_argument("--full-frame", action="store_true",
                    help="segment whole frames, not only the band where a target within --max-distance-m can appear")
+    p.add_argument("--keep-edge-regions", action="store_true",
+                   help="keep a region cut by the frame's left, right or top edge when it continues a track "
+                        "(measured from its visible part); default: drop every region cut by the edge, as the "
+                        "paper does")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _detect_parser() -> argparse.ArgumentParser:
+    p = Parser(prog="python -m detector", usage=USAGE, description="Detect and classify moving objects in a "
+               "video (pedestrian, group, cyclist, vehicle, noise). 'python -m detector calibrate --help' "
+               "estimates the camera file from people walking by; 'python -m detector train --help' trains "
+               "a model for one camera.")
+    add_detect_arguments(p)
     return p
 
 
@@ -272,45 +277,80 @@ def _train_parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv: list[str] | None = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    # killed from outside (SIGTERM), a job still removes its half-written output
-    with exit_on_terminate():
-        try:
-            if argv and argv[0] == "train":
-                return _train(_train_parser().parse_args(argv[1:]))
-            args = _detect_parser().parse_args(argv)
-            check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
-            summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
-                                   args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video,
-                                   full_frame=args.full_frame)
-        except USER_ERRORS as exc:
-            print(f"error: {exc}", file=sys.stderr)
+def run_detect(args: argparse.Namespace) -> int:
+    """Run parsed ``add_detect_arguments`` arguments: detect, print what was found and where it was
+    written; a user error is one line and exit code 2."""
+    try:
+        if args.camera is None:
+            print(f"error: --camera: {HOW_TO_GET_A_CAMERA}", file=sys.stderr)
             return USAGE_EXIT
+        check_output_dir(args.out, "python -m detector", DETECT_OUTPUTS)  # detect_video checks again: an API
+        summary = detect_video(args.video, args.camera, args.out, args.model, args.max_width,
+                               args.max_distance_m, progress=not args.no_progress, annotated=not args.no_video,
+                               full_frame=args.full_frame, border_filter=not args.keep_edge_regions)
+    except USER_ERRORS as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return USAGE_EXIT
     proc = summary["processing"]
     scaled = (f"processed at {proc['processing_width_px']}x{proc['processing_height_px']} px "
               f"(x{1 / proc['source_px_per_processing_px_x']:.3f}); boxes in the video's "
               f"{proc['video_width_px']}x{proc['video_height_px']} px")
-    print(f"{summary['frames']} frames {scaled}; target in {summary['frames_with_target']} frames; "
-          f"regions per class {summary['regions_per_class']}")
+    print(f"{summary['frames']} frames {scaled}; target in {summary['frames_with_target']} frames "
+          f"(detections.csv's target column); target rows per class {summary['target_rows_per_class']}")
     print(f"tracks per class {summary['tracks']}")
     video = "" if args.no_video else " annotated.mp4,"
     print(f"results written to {args.out}/: detections.csv, tracks.csv,{video} summary.json")
     return 0
 
 
+def interruptible(job, out: str | Path | None) -> int:
+    """``job()``'s exit code; Ctrl-C (or SIGTERM, within ``exit_on_terminate``) ends it with one
+    line, 'interrupted: ...', and exit 130 (143), no traceback. ``out``: what the job writes;
+    its staged output is already gone when the line is printed (``detector.outdir``)."""
+    where = "nothing written" if out is None else f"{out} left as it was"
+    try:
+        return job()
+    except KeyboardInterrupt:
+        code = INTERRUPTED_EXIT
+    except SystemExit as exc:
+        if exc.code != TERMINATED_EXIT:
+            raise
+        code = TERMINATED_EXIT
+    sys.stderr.write(f"\ninterrupted: {where}\n")
+    return code
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # killed from outside (SIGTERM), a job still removes its half-written output
+    with exit_on_terminate():
+        if argv and argv[0] == "train":
+            args = _train_parser().parse_args(argv[1:])
+            return interruptible(lambda: _train(args), args.out)
+        if argv and argv[0] == "calibrate":
+            from detector.selfcal.cli import calibrate_main
+
+            return interruptible(lambda: calibrate_main(argv[1:]), None)
+        args = _detect_parser().parse_args(argv)
+        return interruptible(lambda: run_detect(args), args.out)
+
+
 def _train(args: argparse.Namespace) -> int:
     from detector.train.sets import UnseenKindError
 
-    check_output_file(args.out)
     try:
-        path = train_camera(args.camera, args.out, seed=args.seed)
-    except UnseenKindError as exc:
-        raise CameraError(
-            f"{args.camera}: this camera never sees a whole {exc.kind} in its frame "
-            f"({exc.seen} of {exc.attempts} tries), so no model can be trained for it; "
-            "check its height_m, tilt_deg and field of view"
-        ) from None
+        check_output_file(args.out)
+        try:
+            path = train_camera(args.camera, args.out, seed=args.seed)
+        except UnseenKindError as exc:
+            raise CameraError(
+                f"{args.camera}: this camera never sees a whole {exc.kind} in its frame "
+                f"({exc.seen} of {exc.attempts} tries), so no model can be trained for it; "
+                "check its height_m, tilt_deg and field of view"
+            ) from None
+    except USER_ERRORS as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return USAGE_EXIT
     print(f"model written to {path}")
     return 0
 

@@ -3,6 +3,9 @@
 ``Detector.process``: segment (``detector.segment``), features (eqs. 1-11), division of regions
 merged with their light spot (section 5.2), tracks (``detector.tracks``), one classifier
 evaluation, and each track's target decision; ``tracking=False`` is the paper's per-frame path.
+Regions cut by the frame's edge are dropped (the paper's border filter) unless
+``border_filter=False``, which measures a region cut by the left, right or top edge from its
+visible part when it continues a track.
 Boxes are OpenCV ``(x, y, w, h)`` pixels of the full, distorted frame; distances are forward
 ground distances, m (see ``detector.camera``).
 
@@ -21,7 +24,8 @@ import numpy as np
 
 from detector.camera import CameraModel
 from detector.confirm import Tracker
-from detector.divide import DivisionParams, divide_rows
+from detector.divide import MIN_SPOT_BRIGHTENING_DN, DivisionParams, divide_rows
+from detector.edges import keep_side_cut_continuing_tracks
 from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
 from detector.ghosts import StillRegions
 from detector.roi import Crop, full_frame, range_crop
@@ -114,21 +118,21 @@ class Detector:
     tracker : detector.confirm.Tracker, optional
         The per-frame path's light box tracker (``tracking=False``).
     crop_to_range : bool
-        Segment only the rows (and columns) of the frame where a target within
-        ``max_distance_m`` can appear (``detector.roi.range_crop``, the crop in ``self.crop``);
-        every target within range is then detected as on the full frame (same box, features and
-        class); only regions reaching above the band (beyond range, or taller than any target)
-        are dropped. False: the whole frame, as the paper's implementation does. CLAHE gives the
-        crop the whole frame's values, computed on the crop (``detector.clahe``).
+        Segment only the band of the frame where a target within ``max_distance_m`` can appear
+        (``detector.roi.range_crop``; ``self.crop``), with the same boxes, features and classes
+        as on the full frame; False: the whole frame, as the paper does.
     equalise_tiles_only : bool
-        OpenCV's CLAHE on the full frame's tiles the crop needs instead (equalised values 1 DN
-        apart on about 0.1 % of the pixels, so now and then a box a pixel or two off the full
-        frame's).
+        OpenCV's CLAHE on just the full frame's tiles the crop needs (values 1 DN off on ~0.1 %
+        of the pixels) instead of ``detector.clahe``'s exact crop equalisation.
     tracking : bool
         Decide per track (``detector.tracks``, the default) or per frame (False: the paper's
         path).
     tracks : detector.tracks.tracker.TrackSet, optional
         A configured ``TrackSet``; None builds the default one.
+    border_filter : bool
+        Drop every region cut by the frame's edge, as the paper does (the default). False: a
+        region cut only by the left, right or top edge (its bottom, so its distance, in view) is
+        measured from its visible part and classified when it overlaps a live track's last box.
 
     Notes
     -----
@@ -149,6 +153,7 @@ class Detector:
         equalise_tiles_only: bool = False,
         tracking: bool = True,
         tracks: TrackSet | None = None,
+        border_filter: bool = True,
     ) -> None:
         if not isinstance(camera, CameraModel):
             raise TypeError(f"Detector camera must be a CameraModel, got {type(camera).__name__}")
@@ -182,6 +187,7 @@ class Detector:
         if self._rows_proba is None and proba_rows is not None:
             self._rows_proba = lambda feats: np.array(proba_rows(feats.tolist()))
         self.max_distance_m = float(max_distance_m)
+        self.border_filter = bool(border_filter)
         self.target_threshold = float(target_threshold)
         self.division = division
         load_compiled_splits(division)
@@ -194,11 +200,8 @@ class Detector:
             params.dilate_iterations,
             equalise_tiles_only,
         )
-        self.crop: Crop = (
-            self.band
-            if crop_to_range
-            else full_frame(camera.height_px, camera.width_px, params.clahe_tile_px)
-        )
+        self.crop: Crop = self.band if crop_to_range else full_frame(camera.height_px, camera.width_px,
+                                                                     params.clahe_tile_px)
         self.segmenter = Segmenter(params, camera.fps, self.crop)
         # per-camera constants, computed once rather than every frame
         self._frame_shape = (camera.height_px, camera.width_px)
@@ -243,6 +246,19 @@ class Detector:
                 d.track_target if d.track_p_target is not None else d.p_target >= threshold for d in detections
             )
         return any(d.p_target >= threshold for d in detections)
+
+    def _lit(self, object_box_px: list[int], spot_box_px: list[int]) -> bool:
+        """Is this spot part of a region a light spot: brighter than the ground was and than the
+        object part? Division only then."""
+        spot, body = self.segmenter.brightness_dn(spot_box_px), self.segmenter.brightness_dn(object_box_px)
+        if spot is None or body is None:
+            return False
+        return spot[0] - max(spot[1], body[0]) >= MIN_SPOT_BRIGHTENING_DN
+
+    def _keep_side_cut(self, regions: Regions, boxes: list, edge: list) -> None:
+        """Un-flag (in ``edge``) the side-cut regions that continue a track (``detector.edges``)."""
+        live = [] if self.tracks is None else [t.box_px for t in self.tracks.tracks]
+        keep_side_cut_continuing_tracks(regions, boxes, edge, self._frame_shape[0], live)
 
     def _nothing(self) -> list[Detection]:
         """A frame with no region to classify: the tracks age (or the box tracker sees nothing)."""
@@ -320,11 +336,13 @@ class Detector:
             edge = regions.unusable.tolist()
         rows = self._geometry.rows(boxes, areas)
         divided, _ = divide_rows(
-            self._geometry, regions.contours, boxes, areas, rows, self.division, self._divide_within_m
+            self._geometry, regions.contours, boxes, areas, rows, self.division, self._divide_within_m, self._lit
         )
         # a region cut by the border (or the crop) is classified only as the object divided off
         # it, when that object is clear of the edge (the light spot was the part that reached it)
         if any(edge):
+            if not self.border_filter:
+                self._keep_side_cut(regions, boxes, edge)
             crop = self.crop
             left, top, right, bottom = crop.left_px, crop.top_px, crop.right_px, crop.bottom_px
             for i in divided:

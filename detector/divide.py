@@ -15,13 +15,16 @@ pixel-only tests of ``detector.split`` (which also holds the thresholds,
 ``DivisionParams``, and the evidence for them). The division stands only if,
 measured in metres by ``region_features``, the spot part is flat (height /
 width below ``max_spot_height_to_width``) and the object part is more upright
-and more compact (higher extent) than the whole.
+and more compact (higher extent) than the whole. And only where a light spot is there: given
+``lit`` (the detector's, from ``Segmenter.brightness_dn``: the spot part at least
+``MIN_SPOT_BRIGHTENING_DN`` brighter than the ground was and than the object part), a spot
+part that is no light on the ground (a day car's body under its roof, a shadow) divides nothing.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -33,7 +36,11 @@ from detector.split import DivisionParams
 from detector.split_compiled import split_at_widening, split_object_and_spot
 
 # DivisionParams is re-exported: it is the parameter of divide_rows and divide_regions
-__all__ = ["Division", "DivisionParams", "divide_regions", "divide_rows"]
+__all__ = ["MIN_SPOT_BRIGHTENING_DN", "Division", "DivisionParams", "divide_regions", "divide_rows"]
+
+#: a light spot is brighter, on average over its foreground pixels (equalised DN of 255), by at
+#: least this much than the background model there and than the object part
+MIN_SPOT_BRIGHTENING_DN = 12.0
 
 # frozen, so one shared default instance is safe
 _DEFAULT_PARAMS = DivisionParams()
@@ -136,6 +143,7 @@ def divide_rows(
     rows: list[list[float] | None],
     params: DivisionParams = _DEFAULT_PARAMS,
     beyond_m: float = math.inf,
+    lit: Callable[[list[int], list[int]], bool] | None = None,
 ) -> tuple[list[int], list[list[int]]]:
     """``divide_regions`` on plain Python rows, replacing divided regions' entries in place.
 
@@ -145,7 +153,9 @@ def divide_rows(
     a frame's few regions cost no array round trip. Regions farther than ``beyond_m`` are
     not tried: the detector passes its range for a camera without lens distortion, where the
     object part (inside the region's box: its bottom row at or above the region's) is at least
-    as far away, so it would be dropped as beyond range all the same.
+    as far away, so it would be dropped as beyond range all the same. ``lit``: whether a spot
+    part is a light spot, given the object's and the spot's frame boxes; a division whose spot is not stands not (None: every
+    division stands, as the paper's).
     """
     divided: list[int] = []
     spots: list[list[int]] = []
@@ -169,7 +179,7 @@ def divide_rows(
             )
             if accepted is not None:
                 break
-        if accepted is None:
+        if accepted is None or (lit is not None and not lit(accepted[0][0], accepted[1])):
             continue
         body, spot, body_row = accepted
         boxes_px[i], areas_px[i], rows[i] = body[0], body[1], body_row
@@ -186,12 +196,13 @@ def divide_regions(
     features: np.ndarray,
     valid: np.ndarray,
     params: DivisionParams = _DEFAULT_PARAMS,
+    lit: Callable[[list[int], list[int]], bool] | None = None,
 ) -> Division:
     """Divide candidate regions into object + light spot; features recomputed for the objects.
 
     Inputs are aligned per region: OpenCV contours (frame coordinates), boxes
     (x, y, w, h), contour areas, and ``region_features`` rows and validity.
-    Regions that are not divided pass through unchanged.
+    Regions that are not divided pass through unchanged; ``lit`` as in ``divide_rows``.
     """
     boxes = np.asarray(boxes_px, np.int32).reshape(-1, 4)
     areas = np.asarray(areas_px, np.float64).reshape(-1)
@@ -200,7 +211,7 @@ def divide_regions(
     box_rows, area_rows = boxes.tolist(), areas.tolist()
     rows = [row if ok else None for row, ok in zip(feats.tolist(), valid.tolist(), strict=True)]
     divided, spots = divide_rows(
-        RegionGeometry(camera), contours, box_rows, area_rows, rows, params
+        RegionGeometry(camera), contours, box_rows, area_rows, rows, params, lit=lit
     )
     out_boxes, out_areas, out_feats = boxes.copy(), areas.copy(), feats.copy()
     for i in divided:

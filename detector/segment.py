@@ -15,6 +15,7 @@ Design: docs/design/modules.md (Segmentation)
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -215,6 +216,22 @@ class Segmenter:
             detectShadows=p.detect_shadows,
         )
         self._mog2.setShadowValue(self._shadow_value)
+
+    def brightness_dn(self, box_px: Sequence[int]) -> tuple[float, float] | None:
+        """(last frame, background model) mean equalised brightness over the foreground pixels of
+        ``box_px`` (x, y, w, h, frame pixels), DN; None where it holds none. A light spot on the
+        ground is brighter than the ground was, and brighter than the object casting it. Reads
+        the model's background image (a whole-crop computation): for the few regions that ask."""
+        left, top = self._lo
+        x, y, w, h = box_px
+        x0, y0 = max(x - left, 0), max(y - top, 0)
+        x1, y1 = x - left + w, y - top + h
+        fg = self._fg[y0:y1, x0:x1] > 0
+        background = self._mog2.getBackgroundImage() if fg.any() else None
+        if background is None:
+            return None
+        now = self._equalised_crop[y0:y1, x0:x1][fg].astype(np.float64)
+        return float(now.mean()), float(background[y0:y1, x0:x1][fg].mean())
 
     def apply(self, gray: np.ndarray, learning_rate: float | None = None) -> Regions:
         """Segment one uint8 (H, W) frame and update the background model.

@@ -53,8 +53,12 @@ def quiet_stderr() -> Iterator[None]:
 def probe_video(path: str | Path) -> VideoInfo:
     """Open a video and decode its first frame; raise VideoError if that fails."""
     path = Path(path)
+    if path.is_dir():
+        raise VideoError(f"{path}: is a folder, not a video; valid: a video file (e.g. {path / 'clip.mp4'})")
     if not path.is_file():
         raise VideoError(f"{path}: video file not found")
+    if path.stat().st_size == 0:
+        raise VideoError(f"{path}: the file is empty (0 bytes); valid: a video file OpenCV can decode, e.g. .mp4 .avi")
     with quiet_stderr():
         cap = cv2.VideoCapture(str(path))
     try:

@@ -20,7 +20,8 @@ def cmd_render(args) -> int:
     check_output_dir(args.out, "citysim render", RENDER_OUTPUTS)
     with staged_folder(args.out) as stage:  # complete or absent: built aside, renamed into place
         stats = render_clip(scenario, args.lamp, args.duration, stage, start_s=args.start, detect=args.detect,
-                            lamps_full=args.lamps_full, progress=not args.no_progress, camera_side=args.camera)
+                            lamps_full=args.lamps_full, progress=not args.no_progress, camera_side=args.camera,
+                            plain=args.plain)
     print(f"{stats['frames']} frames from t = {args.start:g} s, {stats['truth_rows']} truth boxes"
           + (f", target detected in {stats['frames_with_target_detected']} frames" if args.detect else ""))
     print(f"results written to {args.out}/: camera.mp4, truth.csv, topdown.png")
@@ -46,6 +47,9 @@ def add(sub) -> None:
     rd.add_argument("--detect", action="store_true", help="run the detector and show its boxes beside the truth")
     rd.add_argument("--lamps-full", action="store_true", help="render with every lamp at full level "
                                                                 "(default: at the luminaire's dim_level)")
+    rd.add_argument("--plain", action="store_true",
+                    help="camera.mp4 without truth boxes or captions (the truth stays in truth.csv): footage "
+                         "for python -m detector and its calibration")
     rd.add_argument("--no-progress", action="store_true", help="no progress bar")
     rd.set_defaults(func=cmd_render, out_lock=True)
 

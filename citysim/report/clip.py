@@ -3,7 +3,9 @@
 Runs the street's traffic (no controller: every lamp at its dim level, or
 full with ``lamps_full``) and renders the chosen lamp's camera at its frame
 rate. Writes camera.mp4 (truth boxes in white; with ``detect``, the real
-detector's boxes in class colours beside them), truth.csv and topdown.png.
+detector's boxes in class colours beside them), truth.csv and topdown.png. ``plain``:
+camera.mp4 holds the camera's frames as they are, nothing drawn (the truth stays in
+truth.csv), to be fed to ``python -m detector`` and its calibration like real footage.
 """
 
 from __future__ import annotations
@@ -32,13 +34,14 @@ CAMERA_SIDES = ("forward", "backward")
 
 def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path, *, start_s: float = 0.0,
                 detect: bool = False, lamps_full: bool = False, progress: bool = True,
-                camera_side: str = "forward") -> dict:
+                camera_side: str = "forward", plain: bool = False) -> dict:
     """Render lamp ``lamp``'s camera (``camera_side``: its forward or backward one) from ``start_s``
     for ``duration_s`` simulated seconds into ``out_dir``.
 
     The traffic runs from the start of the night; frames are taken from ``start_s`` on. With
     ``detect`` the video shows the truth (left) beside the detector's boxes (right), each half
-    captioned.
+    captioned. ``plain``: no truth boxes and no captions drawn (with ``detect``, the plain frame
+    beside the detector's boxes).
     """
     check_clip(scenario, lamp, duration_s, start_s, camera_side)  # before the night is built: a mistake costs nothing
     night = build_night(scenario)
@@ -75,7 +78,7 @@ def render_clip(scenario: Scenario, lamp: int, duration_s: float, out_dir: Path,
                     for obj in frame.truth:
                         rows.writerow([k, f"{t:.3f}", obj.object_id, obj.cls, obj.x, obj.y, obj.w, obj.h, int(obj.touches_border)])
                     stats["truth_rows"] += len(frame.truth)
-                    writer.write(_clip_frame(frame, detector, stats))
+                    writer.write(_clip_frame(frame, detector, stats, plain))
         finally:
             writer.release()
         plot_topdown(night.street, [s.camera for s in night.street.cameras], {i: np.array(p) for i, p in tracks.items()},
@@ -99,17 +102,20 @@ def check_clip(scenario: Scenario, lamp: int, duration_s: float, start_s: float,
         raise RunError(f"--start: must be >= 0 and < {scenario.duration_s:g} s (the scenario's night), got {start_s:g}")
 
 
-def _clip_frame(frame, detector, stats: dict) -> np.ndarray:
-    """The video frame: truth boxes, and with a detector its boxes beside them, each half captioned."""
+def _clip_frame(frame, detector, stats: dict, plain: bool = False) -> np.ndarray:
+    """The video frame: truth boxes (``plain``: none), and with a detector its boxes beside them,
+    each half captioned (``plain``: not)."""
     truth_img = cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
-    draw_boxes(truth_img, [(o.x, o.y, o.w, o.h) for o in frame.truth], [f"{o.cls}#{o.object_id}" for o in frame.truth])
+    if not plain:
+        draw_boxes(truth_img, [(o.x, o.y, o.w, o.h) for o in frame.truth], [f"{o.cls}#{o.object_id}" for o in frame.truth])
     if detector is None:
         return truth_img
     detections = detector.process(frame.image)
     stats["frames_with_target_detected"] += detector.is_target(detections)
     detected_img = draw_detections(frame.image, detections)
-    _caption(truth_img, "truth")
-    _caption(detected_img, "detector")
+    if not plain:
+        _caption(truth_img, "truth")
+        _caption(detected_img, "detector")
     return np.hstack([truth_img, detected_img])
 
 

@@ -48,6 +48,12 @@ EXIT_MARGIN_PX = 3
 STILL = -2
 #: Why a still region is no target
 STILL_REASON = "still (a ghost)"
+#: an established target (a target in at least this many seconds' frames) stays one through a
+#: passing doubt (``PASSING_DOUBTS``: a walker whose region flickers as he turns, or merges with
+#: his reflection for a few frames) while its pooled P(target) stays at least ``ESTABLISHED_MIN_P``
+ESTABLISHED_TARGET_S = 3.0
+ESTABLISHED_MIN_P = 0.25
+PASSING_DOUBTS = frozenset({"erratic", "size unsteady", "classified noise"})
 _DEFAULT_LIMITS = PlausibilityLimits()
 _DEFAULT_MOTION = MotionLimits()
 _DEFAULT_GATES = Gates()
@@ -308,6 +314,9 @@ class TrackSet:
                 reason = "classified noise"
         else:
             reason = self._steep_reason(track)
+        if reason in PASSING_DOUBTS and track.target_frames >= ESTABLISHED_TARGET_S * self.fps \
+                and track.p_target >= ESTABLISHED_MIN_P:  # fmt: skip
+            reason = None
         # a steady vehicle's motion outweighs frames that look like noise (a car's headlight spot)
         if reason is not None:
             speed_mps = overriding_speed_mps(track, reason, self.motion)

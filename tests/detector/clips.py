@@ -17,9 +17,11 @@ class Clip:
         h, w = camera.height_px, camera.width_px
         self.background = 25.0 + 30.0 * np.linspace(0.0, 1.0, h)[:, None] + self.rng.normal(0, 2, (h, w))
 
-    def frame(self, shapes=(), level_dn: float = 150.0) -> np.ndarray:
+    def frame(self, shapes=(), level_dn: float = 150.0, levels_dn=None) -> np.ndarray:
+        """A frame with ``shapes`` drawn at ``level_dn`` (``levels_dn``: one level per shape)."""
         img = self.background + self.rng.normal(0, 3.0, self.background.shape)
-        for shape in shapes:
+        levels = [level_dn] * len(shapes) if levels_dn is None else levels_dn
+        for shape, level_dn in zip(shapes, levels, strict=True):
             sil = silhouette_mask(self.camera, shape)
             if sil is None:
                 continue

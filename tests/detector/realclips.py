@@ -32,4 +32,5 @@ def detections(tmp_path: Path, clip: str, camera: str) -> tuple[list[dict], dict
 
 
 def target_frames(rows: list[dict], first: int, last: int) -> set[int]:
-    return {int(r["frame"]) for r in rows if r["cls"] != "noise" and first <= int(r["frame"]) <= last}
+    """Frames ``first`` .. ``last`` where a region is a target (detections.csv's ``target`` column)."""
+    return {int(r["frame"]) for r in rows if r["target"] == "1" and first <= int(r["frame"]) <= last}

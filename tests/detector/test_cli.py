@@ -66,7 +66,7 @@ def test_cli_detects_a_walker_at_its_distance_as_a_pedestrian(scene_b_files):
     with open(out / "detections.csv") as fh:
         assert fh.readline().strip().split(",") == CSV_HEADER
     rows = read_rows(out / "detections.csv")
-    targets = [r for r in rows if r["cls"] != "noise"]
+    targets = [r for r in rows if r["frame_cls"] != "noise"]
     frames_with_target = {int(r["frame"]) for r in targets}
     # the walker is whole in view for most of the clip; MOG2 needs a few frames to learn the ground
     in_view = 0
@@ -79,12 +79,12 @@ def test_cli_detects_a_walker_at_its_distance_as_a_pedestrian(scene_b_files):
     distance = np.array([float(r["distance_m"]) for r in targets])
     assert np.median(np.abs(distance - FORWARD_M) / FORWARD_M) < 0.10
     assert np.mean(np.abs(distance - FORWARD_M) / FORWARD_M < 0.10) > 0.8
-    classes = [r["cls"] for r in targets]
+    classes = [r["frame_cls"] for r in targets]
     assert classes.count("pedestrian") / len(classes) > 0.7, classes
     cap = cv2.VideoCapture(str(out / "annotated.mp4"))
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 90
     # one track for the one walker, a pedestrian crossing at 1.4 m/s 10 m ahead of the pole
-    tracked = [r for r in targets if r["track_cls"] == "pedestrian"]
+    tracked = [r for r in targets if r["target_cls"] == "pedestrian"]
     assert len(tracked) >= 0.8 * len(targets) and len({r["track_id"] for r in tracked}) == 1
     assert np.median([float(r["speed_mps"]) for r in tracked if r["speed_mps"]]) == pytest.approx(1.4, abs=0.2)
     assert np.median([float(r["ground_x_m"]) for r in tracked]) == pytest.approx(FORWARD_M, rel=0.1)
@@ -94,6 +94,15 @@ def test_cli_detects_a_walker_at_its_distance_as_a_pedestrian(scene_b_files):
     assert int(walker[0]["frames_seen"]) >= 0.8 * in_view
     assert float(walker[0]["mean_speed_mps"]) == pytest.approx(1.4, abs=0.2)
     assert all(t["reject_reason"] for t in tracks if t["cls"] == "noise")
+    # one answer: the target column is the track's decision, and summary.json counts the CSV's rows
+    assert all(r["target"] == ("0" if r["target_cls"] == "noise" else "1") for r in rows)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["frames_with_target"] == len({r["frame"] for r in rows if r["target"] == "1"}) > 0
+    per_class: dict[str, int] = {}
+    for r in rows:
+        if r["target"] == "1":
+            per_class[r["target_cls"]] = per_class.get(r["target_cls"], 0) + 1
+    assert summary["target_rows_per_class"] == per_class
 
 
 
@@ -387,6 +396,35 @@ def test_note_says_why_a_low_camera_gets_its_own_model(tmp_path, capsys, monkeyp
     assert "inf" not in err and "sees only" not in err, err
     assert len(trained) == 1
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["model"].startswith("trained for")
+    # the second run reuses the cached model and says so; another camera is trained anew
+    assert main([str(video), "--camera", str(camera), "--out", str(tmp_path / "out"), "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert "reusing the model trained for this camera" in err and "training" not in err, err
+    assert len(trained) == 1
+    higher = tmp_path / "higher.yaml"
+    higher.write_text(camera.read_text().replace("height_m: 1.6", "height_m: 1.7"))
+    assert main([str(video), "--camera", str(higher), "--out", str(tmp_path / "out"), "--no-progress"]) == 0
+    assert "training a model for this camera" in capsys.readouterr().err
+    assert len(trained) == 2
+
+
+def test_the_model_cache_key_follows_what_the_model_depends_on(monkeypatch):
+    import sklearn
+
+    from detector import model_cache
+
+    cam = CameraModel(**SCENE_B)
+    key = model_cache.model_key(cam, 0, 800)
+    assert model_cache.model_key(cam.placed(name="renamed"), 0, 800) == key  # a name changes no pixel
+    assert model_cache.model_key(cam.placed(tilt_deg=23.0), 0, 800) != key
+    assert model_cache.model_key(cam.placed(k1=-0.1), 0, 800) != key
+    assert model_cache.model_key(cam, 1, 800) != key
+    assert model_cache.model_key(cam, 0, 400) != key
+    monkeypatch.setattr(sklearn, "__version__", "0.0")
+    assert model_cache.model_key(cam, 0, 800) != key
+    monkeypatch.undo()
+    monkeypatch.setattr(model_cache, "training_code_digest", lambda: "another training code")
+    assert model_cache.model_key(cam, 0, 800) != key
 
 
 @pytest.mark.parametrize(
@@ -412,3 +450,27 @@ def test_camera_file_typo_suggests_the_field(tmp_path):
     cam.write_text(yaml.safe_dump({**{k: v for k, v in SCENE_B.items() if k != "focal_mm"}, "focal_mn": 0.73}))
     with pytest.raises(Exception, match=r"focal_mn: unknown field; did you mean focal_mm\?"):
         CameraModel.from_yaml(cam)
+
+
+def test_a_walker_cut_by_the_frames_side_is_kept_with_keep_edge_regions(tmp_path, capsys):
+    """A walker crossing out of the frame's side: with --keep-edge-regions his regions cut by the
+    edge are classified from their visible part (bottom row in view: distance known) and stay on
+    his track; by default they are dropped as the paper does."""
+    camera = CameraModel(**SCENE_B)
+    (tmp_path / "cam.yaml").write_text(yaml.safe_dump(SCENE_B))
+    write_walker_video(tmp_path / "walker.mp4", camera, FORWARD_M, n_frames=120)  # walks out at the right
+    outs = {flag: tmp_path / flag for flag in ("kept", "filtered")}
+    for flag, out in outs.items():
+        extra = ["--keep-edge-regions"] if flag == "kept" else []
+        assert main([str(tmp_path / "walker.mp4"), "--camera", str(tmp_path / "cam.yaml"), "--out", str(out),
+                     "--no-video", "--no-progress", *extra]) == 0
+    kept, filtered = (read_rows(out / "detections.csv") for out in outs.values())
+    right = SCENE_B["width_px"]
+    at_edge = [r for r in kept if int(r["x"]) + int(r["w"]) >= right]
+    assert at_edge, "the walker should reach the frame's right edge"
+    assert not [r for r in filtered if int(r["x"]) + int(r["w"]) >= right]
+    # measured from the visible part: the distance (bottom row) is right, and his track keeps him
+    assert np.median([float(r["distance_m"]) for r in at_edge]) == pytest.approx(FORWARD_M, rel=0.1)
+    assert sum(r["target"] == "1" for r in at_edge) >= 0.5 * len(at_edge)
+    summaries = [json.loads((out / "summary.json").read_text()) for out in outs.values()]
+    assert [s["border_filter"] for s in summaries] == [False, True]

@@ -12,7 +12,7 @@ from sklearn.linear_model import LogisticRegression
 from detector.classes import CLASSES
 from detector.confirm import Tracker
 from detector.detector import Detection, Detector
-from detector.divide import divide_regions
+from detector.divide import MIN_SPOT_BRIGHTENING_DN, divide_regions
 from detector.fast_proba import numpy_predict_proba
 from detector.features import SCALAR_MAX_REGIONS, region_features
 from detector.general_model import default_model
@@ -217,7 +217,12 @@ def reference_process(camera, model, segmenter, tracker, frame, max_distance_m=2
     regions = segmenter.apply(frame)
     boxes, areas = regions.boxes_px, regions.areas_px
     feats, valid = region_features(camera, boxes, areas)
-    parts = divide_regions(camera, regions.contours, boxes, areas, feats, valid)
+
+    def lit(body_box, spot_box):  # a light spot: brighter than the ground was and than the object
+        spot, body = segmenter.brightness_dn(spot_box), segmenter.brightness_dn(body_box)
+        return spot is not None and body is not None and spot[0] - max(spot[1], body[0]) >= MIN_SPOT_BRIGHTENING_DN
+
+    parts = divide_regions(camera, regions.contours, boxes, areas, feats, valid, lit=lit)
     # a border region counts only as an object divided off it clear of the border
     ob = parts.boxes_px
     clear = np.all(
@@ -259,7 +264,8 @@ def test_optimised_detector_equals_the_straightforward_computation(model):
                 cyclist_shape(6.0 + 4.0 * (t_s - 40 / FPS), 0.5, 0.0, 0.6, 1.7, 1.8, 3.0 * t_s),
                 ground_spot_shape(8.5 + 4.0 * (t_s - 40 / FPS), 0.5, 0.0, 1.6, 1.2),
             ]
-        img = clip.frame(shapes)
+        # the headlight's spot is brighter than the cyclist (a light spot: division only then)
+        img = clip.frame(shapes, levels_dn=[150, 150, 120, 220][: len(shapes)])
         if k >= 40 and k % 4 == 0:
             for x, y in rng.uniform((20, 100), (300, 225), (24, 2)).astype(int):
                 img[y : y + 11, x : x + 11] = 220

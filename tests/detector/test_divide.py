@@ -49,6 +49,15 @@ def car_on_beam(bottom_px: int, right_px: int) -> np.ndarray:
     return mask
 
 
+def blob_mask() -> np.ndarray:
+    """The car alone: ``car_on_beam``'s blob without its beam."""
+    mask = np.zeros((H_PX, W_PX), np.uint8)
+    x, y, w, h = BLOB_BOX
+    cv2.ellipse(mask, (x + w // 2, y + h // 2), (w // 2, h // 2), 0, 0, 360, 255, -1)
+    mask[y + 3 : y + h - 3, x : x + w] = 255
+    return mask
+
+
 def iou(a, b) -> float:
     ax, ay, aw, ah = a
     bx, by, bw, bh = b
@@ -109,7 +118,8 @@ def test_detector_classifies_the_object_cut_off_a_border_region():
     found = []
     for _ in range(3):
         img = background + rng.normal(0, 2, (H_PX, W_PX))
-        img[car_on_beam(H_PX - 1, W_PX - 1) > 0] = 200
+        img[car_on_beam(H_PX - 1, W_PX - 1) > 0] = 200  # the beam lights the road
+        img[blob_mask() > 0] = 110  # the car's body, darker than the lit road
         found = det.process(np.clip(img, 0, 255).astype(np.uint8))
     regions = det.last_regions
     assert len(regions) == 1 and regions.touches_border.all()
@@ -127,3 +137,28 @@ def test_beam_params_are_validated():
         DivisionParams(min_top_rows=1)
     with pytest.raises(ValueError, match="max_beam_height_to_width"):
         DivisionParams(max_beam_height_to_width=0.0)
+
+
+def _detect_shape(ground_dn: int, body_dn: int, beam_dn: int) -> list:
+    """The Detector's detections in a frame where the car-on-beam shape (``car_on_beam(170, 290)``)
+    is drawn on a plain ground after 30 frames of the empty ground: the blob in ``body_dn``,
+    the rest of the shape in ``beam_dn``."""
+    detector = Detector(scene_b(), crop_to_range=False)
+    rng = np.random.default_rng(0)
+    ground = np.full((H_PX, W_PX), ground_dn, np.uint8)
+    for _ in range(30):
+        detector.process(np.clip(ground + rng.normal(0, 2, ground.shape), 0, 255).astype(np.uint8))
+    frame = ground.copy()
+    frame[car_on_beam(170, 290) > 0] = beam_dn
+    frame[blob_mask() > 0] = body_dn
+    return detector.process(np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8))
+
+
+def test_division_only_where_the_spot_is_light():
+    """Night: a headlight beam brightens the ground, the car is cut off it. Day: the same shape in
+    one bright paint (a car's roof above its wider body, brighter than the road) is not divided:
+    no light spot there."""
+    night = _detect_shape(ground_dn=30, body_dn=90, beam_dn=170)
+    assert any(iou(d.box_px, BLOB_BOX) >= 0.7 for d in night), [d.box_px for d in night]  # grown by the dilation
+    day = _detect_shape(ground_dn=90, body_dn=200, beam_dn=200)
+    assert day and not any(iou(d.box_px, BLOB_BOX) >= 0.5 for d in day), [d.box_px for d in day]

@@ -31,7 +31,7 @@ def track_targets(rows, first, last, in_part=lambda r: True) -> dict[str, set[in
     class not noise), of the detections ``in_part``."""
     out: dict[str, set[int]] = {}
     for r in rows:
-        if r["track_cls"] != "noise" and first <= int(r["frame"]) <= last and in_part(r):
+        if r["target_cls"] != "noise" and first <= int(r["frame"]) <= last and in_part(r):
             out.setdefault(r["track_id"], set()).add(int(r["frame"]))
     return out
 
@@ -42,7 +42,7 @@ def test_car_park_by_day_quiet_stretch_stays_dark_and_walker_is_seen(car_park):
     assert len(target_frames(rows, 50, 100)) <= 3
     assert track_targets(rows, 45, 105) == {}
     # still regions (ghosts on the painted lines, ``detector.ghosts``) are never targets
-    assert not [r for r in rows if r["track_id"] == "" and r["track_cls"] != "noise"]
+    assert not [r for r in rows if r["track_id"] == "" and r["target_cls"] != "noise"]
     # frames ~290-340: a pedestrian walks across alone, tracked (a still region on a painted line,
     # classified pedestrian in 10 of these frames, no longer counts): his track is a pedestrian
     # target in 24 of the 41 frames (0b837fd: 0, 'classified noise'; only his legs are segmented in
@@ -51,9 +51,9 @@ def test_car_park_by_day_quiet_stretch_stays_dark_and_walker_is_seen(car_park):
     assert len(walker) == 1, walker
     ((track_id, frames),) = walker.items()
     assert len(frames) > 0.5 * 41
-    assert {r["track_cls"] for r in rows if r["track_id"] == track_id and r["track_cls"] != "noise"} == {"pedestrian"}
-    tracked = [r for r in rows if r["track_id"] == track_id and r["cls"] != "noise"]
-    assert len(tracked) >= 15 and np.mean([r["cls"] == "pedestrian" for r in tracked]) > 0.6
+    assert {r["target_cls"] for r in rows if r["track_id"] == track_id and r["target_cls"] != "noise"} == {"pedestrian"}
+    tracked = [r for r in rows if r["track_id"] == track_id and r["frame_cls"] != "noise"]
+    assert len(tracked) >= 15 and np.mean([r["frame_cls"] == "pedestrian" for r in tracked]) > 0.6
 
 
 def test_cyclist_and_bicycle_wheeled_are_targets(car_park):
@@ -95,8 +95,8 @@ def test_each_car_is_one_vehicle_target_while_in_view(car_park):
                   and int(r["x"]) + int(r["w"]) / 2 < CAR_PART_MAX_X_PX
                   and int(r["y"]) + int(r["h"]) / 2 > CAR_PART_MIN_Y_PX]  # fmt: skip
         tracked = {int(r["frame"]) for r in on_car}
-        vehicle = {int(r["frame"]) for r in on_car if r["track_cls"] == "vehicle"}
-        assert len({r["track_id"] for r in on_car if r["track_cls"] == "vehicle"}) == 1, car
+        vehicle = {int(r["frame"]) for r in on_car if r["target_cls"] == "vehicle"}
+        assert len({r["track_id"] for r in on_car if r["target_cls"] == "vehicle"}) == 1, car
         assert len(vehicle) >= 0.6 * len(tracked), car
         # and never a target of another class after it was a vehicle
-        assert not [r for r in on_car if int(r["frame"]) > min(vehicle) and r["track_cls"] not in ("vehicle", "noise")]
+        assert not [r for r in on_car if int(r["frame"]) > min(vehicle) and r["target_cls"] not in ("vehicle", "noise")]

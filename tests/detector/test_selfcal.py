@@ -1,0 +1,110 @@
+"""Self-calibration (``detector.selfcal``): height and tilt from walkers, on exact synthetic
+sightings and on a clip rendered by citysim with nothing drawn on it (``render --plain``)."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from detector.camera import CameraModel
+from detector.selfcal.solve import PRIOR_HEIGHT_M, CalibrationError, calibrate
+
+REPO = Path(__file__).resolve().parents[2]
+LENS = dict(focal_mm=0.73, sensor_w_mm=0.7, sensor_h_mm=0.525, width_px=320, height_px=240)
+
+
+def synthetic_tracks(camera: CameraModel, heights_m, rng) -> list[np.ndarray]:
+    """Walkers of the given heights walking straight towards the camera, each sighting's head and
+    foot rows projected exactly (``CameraModel.project``; camera at the origin looking along +x) and jittered by up to half a pixel."""
+    tracks = []
+    for k, h in enumerate(heights_m):
+        lateral = -3.0 + 6.0 * k / max(len(heights_m) - 1, 1)
+        rows = []
+        for f, forward in enumerate(np.linspace(16.0, 16.0 - 1.4 * 89 / 15, 90)):  # 1.4 m/s at 15 fps
+            feet, head = camera.project(np.array([[forward, lateral, 0.0], [forward, lateral, h]]))
+            jitter = rng.uniform(-0.5, 0.5, 2)
+            rows.append((f, feet[0], head[1] + jitter[0], feet[1] + jitter[1], 10.0))
+        tracks.append(np.array(rows))
+    return tracks
+
+
+@pytest.mark.parametrize(("height_m", "tilt_deg"), [(3.0, 30.0), (5.0, 15.0), (8.0, 5.0), (6.0, 22.0)])
+def test_exact_sightings_give_the_camera_back(height_m, tilt_deg):
+    camera = CameraModel(height_m=height_m, tilt_deg=tilt_deg, **LENS)
+    rng = np.random.default_rng(1)
+    tracks = synthetic_tracks(camera, np.full(8, PRIOR_HEIGHT_M), rng)
+    cal = calibrate(tracks, 320, 240, camera.fx_px, camera.fy_px, 15.0)
+    assert cal.height_m == pytest.approx(height_m, rel=0.02)
+    assert cal.tilt_deg == pytest.approx(tilt_deg, abs=0.3)
+    assert cal.walkers == 8 and cal.height_sd_m < 0.1 * height_m and cal.tilt_sd_deg < 1.0
+
+
+def test_the_height_rests_on_the_walkers_mean_height():
+    camera = CameraModel(height_m=5.0, tilt_deg=15.0, **LENS)
+    tall = synthetic_tracks(camera, np.full(6, 1.1 * PRIOR_HEIGHT_M), np.random.default_rng(2))
+    cal = calibrate(tall, 320, 240, camera.fx_px, camera.fy_px, 15.0)
+    # people 10 % taller than the prior make the camera look 10 % lower; the tilt does not care
+    assert cal.height_m == pytest.approx(5.0 / 1.1, rel=0.02)
+    assert cal.tilt_deg == pytest.approx(15.0, abs=0.3)
+
+
+def test_too_few_walkers_is_one_clear_error():
+    camera = CameraModel(height_m=5.0, tilt_deg=15.0, **LENS)
+    tracks = synthetic_tracks(camera, [1.7, 1.6], np.random.default_rng(3))
+    with pytest.raises(CalibrationError, match="only 2 walkers.*towards or away"):
+        calibrate(tracks, 320, 240, camera.fx_px, camera.fy_px, 15.0)
+
+
+@pytest.mark.slow
+def test_a_rendered_street_calibrates_its_camera(tmp_path):
+    """A 7 m pole tilted 20 deg over a street with walkers (60 s, 900 frames rendered plain): the
+    calibrate command's estimate is within 10 % of the height and 2 deg of the tilt."""
+    from citysim.config.scenario import load_scenario
+    from citysim.report.clip import render_clip
+    from detector.__main__ import main
+    from tests.citysim.streets import two_way_street
+
+    (tmp_path / "scene_b.yaml").write_text((REPO / "scenarios" / "cameras" / "scene_b.yaml").read_text())
+    scenario = {"name": "walkers", "seed": 5, "duration_s": 105.0, "street": two_way_street(120),
+                "lamps": {"count": 3, "spacing_m": 40, "first_x_m": 20, "y_m": 6.2, "pole_height_m": 7.0,
+                          "camera": {"file": "scene_b.yaml", "heading_deg": -10, "tilt_deg": 20.0}},
+                "traffic": {"classes": {"pedestrian": {"rate_per_hour": 2000}}}, "controllers": ["always_on"]}
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(scenario))
+    render_clip(load_scenario(tmp_path / "s.yaml"), 1, 60.0, tmp_path / "clip", start_s=40.0, progress=False,
+                plain=True, lamps_full=True)
+    out = tmp_path / "camera.yaml"
+    hfov_deg = math.degrees(2 * math.atan(0.35 / 0.73))  # scene B's lens
+    assert main(["calibrate", str(tmp_path / "clip" / "camera.mp4"), "--hfov-deg", f"{hfov_deg:.4f}", "--out",
+                 str(out), "--no-progress"]) == 0
+    camera = CameraModel.from_yaml(out)
+    assert camera.height_m == pytest.approx(7.0, rel=0.10)
+    assert camera.tilt_deg == pytest.approx(20.0, abs=2.0)
+    assert (camera.width_px, camera.height_px) == (320, 240)
+    assert camera.fx_px == pytest.approx(0.73 * 320 / 0.7, rel=1e-3)
+    assert "walkers" in out.read_text()
+
+
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        (["--hfov-deg", "50", "--focal-mm", "3.6"], ["--focal-mm/--sensor-w-mm/--hfov-deg", "not both or neither"]),
+        ([], ["--focal-mm/--sensor-w-mm/--hfov-deg", "--hfov-deg H"]),
+        (["--focal-mm", "3.6"], ["--focal-mm/--sensor-w-mm: give both"]),
+        (["--hfov-deg", "200"], ["argument --hfov-deg", "<= 179"]),
+    ],
+)
+def test_calibrate_refuses_a_lens_it_cannot_use_in_one_line(tmp_path, capsys, args, needles):
+    from detector.__main__ import main
+
+    try:
+        code = main(["calibrate", str(tmp_path / "v.mp4"), "--out", str(tmp_path / "cam.yaml"), *args])
+    except SystemExit as exc:  # argparse's own refusal
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for needle in needles:
+        assert needle in err, err
+    assert not (tmp_path / "cam.yaml").exists()
