@@ -14,6 +14,7 @@ from citysim.control.detecting import (
     DetectorPerFrame,
     DetectorTracked,
 )
+from citysim.control.fused import DetectorFused
 from citysim.control.located import DetectorLocated
 from citysim.control.oracle import Oracle
 from citysim.control.pir import PassiveInfrared
@@ -23,5 +24,6 @@ CONTROLLERS: dict[str, type[Controller]] = {
     for cls in (
         AlwaysOn, Oracle, Schedule, PassiveInfrared, Threshold5, Threshold05,
         DetectorPerFrame, DetectorConfirmed, DetectorTracked, DetectorNetwork, DetectorLocated,
+        DetectorFused,
     )
 }  # fmt: skip
