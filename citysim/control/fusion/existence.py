@@ -13,7 +13,15 @@ from __future__ import annotations
 #: Chance that a judged frame of a camera reports a road user standing in its view (a hit of its
 #: track): set below the detector's typical rate, so a real road user missed by a few frames is
 #: not dropped, while a ghost seen once is gone within a few of the camera's frames.
-P_DETECT = 0.5
+P_DETECT = 0.25
+#: ... per detector class where it differs: the detector loses cars for many frames at a time
+#: (headlight glare toward the camera, a dark back going away) and bicycles often.
+P_DETECT_BY_CLASS = {"vehicle": 0.05, "cyclist": 0.1}
+
+
+def p_detect(cls: str) -> float:
+    """The detection probability negative information assumes for a track of class ``cls``."""
+    return P_DETECT_BY_CLASS.get(cls, P_DETECT)
 #: Odds factor of one detection associated with a track.
 HIT_LIKELIHOOD_RATIO = 3.0
 #: Below this existence probability a track is dropped (it would light nothing at any sensible threshold).

@@ -115,7 +115,7 @@ class StreetTracker:
             interval = self.views.interval_s(camera, track.s_m, float(track.mean[1]),
                                              math.sqrt(max(float(track.cov[1, 1]), 0.0)))
             if interval is not None:
-                track.mean, track.cov, mass = missed(track.mean, track.cov, *interval, existence.P_DETECT)
+                track.mean, track.cov, mass = missed(track.mean, track.cov, *interval, existence.p_detect(track.cls))
                 track.existence = track.existence * mass / (1.0 - track.existence + track.existence * mass)
         self._merge()
         self._prune()

@@ -81,13 +81,13 @@ def test_a_walker_lost_in_a_blind_stretch_is_carried_into_the_next_view_and_drop
     assert track.existence > 0.5 * p_lost
     # it walks on into lamp 1's camera's view... but it vanished: that camera sees the place empty
     enters_m = next(s for s in np.arange(46.0, 70.0, 0.1) if rig.views.seen_sd(s, SIDEWALK_D_M)[1])
-    for k in range(1, int(20.0 / WALK_MPS * FPS)):
+    for k in range(1, int(30.0 / WALK_MPS * FPS)):
         rig.step(t_blind_s + k / FPS, None, rng)
         if not rig.tracker.tracks:
             break
     assert rig.tracker.tracks == []
     dropped_at_m = 24.0 + WALK_MPS * (t_blind_s + k / FPS)
-    assert enters_m <= dropped_at_m <= enters_m + 8.0  # within 8 m (6 s at its pace) of entering the view
+    assert enters_m <= dropped_at_m <= enters_m + 10.0  # within 10 m (7 s at its pace) of entering the view
 
 
 def test_a_walker_carried_across_a_blind_stretch_is_picked_up_by_the_next_camera_as_the_same_track():
