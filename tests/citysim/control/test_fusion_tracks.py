@@ -8,7 +8,7 @@ import pytest
 from citysim.control.fused import DEFAULT_ZONE_PROBABILITY
 from citysim.control.fusion import existence, kalman
 from citysim.control.fusion.births import P_BIRTH_ENTRY, P_BIRTH_INSIDE
-from citysim.control.fusion.measurement import pixel_covariance_m2
+from citysim.control.fusion.measurement import measure, pixel_covariance_m2
 from citysim.control.fusion.zones import zone_probabilities
 from tests.citysim.control.fusion_walks import FPS, Rig
 
@@ -43,8 +43,6 @@ def test_a_walker_crossing_from_one_cameras_view_to_the_next_keeps_one_street_tr
 def test_a_ghost_seen_once_in_the_middle_of_a_view_lights_no_zone_beyond_its_own():
     rig = Rig()
     ghost = rig.detection(0, 31.0, SIDEWALK_D_M, track_id=7)  # lamp 0's camera sees x 21-40 m: 31 m is 5 m or more from either edge
-    from citysim.control.fusion.measurement import measure
-
     rig.tracker.observe(0, 0.0, [measure(rig.frame, rig.rays[0], 0, ghost, "pedestrian")])
     [track] = rig.tracker.tracks
     assert track.existence == pytest.approx(P_BIRTH_INSIDE)
