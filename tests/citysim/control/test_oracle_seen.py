@@ -58,3 +58,19 @@ def test_oracle_seen_never_lights_more_entries_than_the_oracle_and_the_summary_s
     summary = {"scenario": "tiny", "duration_s": 60.0, "seed": 11, "controllers": out}
     table = comparison_table(summary)
     assert "no camera can see" in table and "pir" in table.split("no camera can see")[1]
+
+
+def test_the_frontier_draws_oracle_seen_as_a_black_cross_beside_the_oracles_star():
+    from citysim.report.frontier import frontier_figure
+
+    controllers = {
+        "oracle": {"controller": "oracle", "lit_on_entry_rate": 1.0, "savings_vs_always_on": 0.3},
+        "oracle_seen": {"controller": "oracle_seen", "lit_on_entry_rate": 0.97, "savings_vs_always_on": 0.31},
+        "detector_fused": {"controller": "detector_fused", "lit_on_entry_rate": 0.96, "savings_vs_always_on": 0.26},
+    }
+    fig = frontier_figure(controllers)
+    ax = fig.axes[0]
+    by_label = {c.get_label(): c for c in ax.collections}
+    seen = by_label["oracle_seen"]
+    assert tuple(seen.get_facecolor()[0][:3]) == (0.0, 0.0, 0.0)
+    assert seen.get_paths()[0].vertices.shape != by_label["oracle"].get_paths()[0].vertices.shape  # not a star
