@@ -1,8 +1,9 @@
 """``detector_fused``: one street track per road user from every camera, lamps lit by the probability of arrival.
 
 Every judged frame of every camera feeds the street tracker (``citysim.control.fusion``): the
-frame's target detections (a hit by its own class or its track's, ``track_windows.frame_hit``;
-no physics rule against it) become street measurements with the camera model's uncertainty, and
+frame's detections of target tracks (``Detector.is_target``: plausible ground motion and size,
+pooled P(target) over the threshold; the decisions fast mode's track tables are calibrated on,
+so both fidelities feed the tracker alike) become street measurements with the camera model's uncertainty, and
 a frame that shows nothing where a track should be lowers that track's existence. Each decision
 step (one camera frame) the controller computes, per lamp zone, the probability that some track
 is in the zone or enters it within the lead (the lamp's ramp from dim, the radio's latency plus
@@ -95,10 +96,11 @@ class DetectorFused(DetectorPerFrame):
 
     def measurements(self, camera_index: int, detections) -> list[Measurement]:
         """The frame's target detections as street measurements."""
-        threshold = self.detectors[camera_index].target_threshold
+        det = self.detectors[camera_index]
         out = []
         for d in detections:
-            if frame_hit(d, threshold) is not True:
+            # a target by its track's decision (the track tables fast mode draws from), never a still region
+            if frame_hit(d, det.target_threshold) is not True or not det.is_target([d]):
                 continue
             cls = detection_class(d)
             if cls == "noise" or (d.velocity_x_mps is not None and abs(d.velocity_x_mps) > IMPLAUSIBLE_MPS):
