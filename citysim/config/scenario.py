@@ -148,6 +148,11 @@ class ControllerSpec(Spec):
         description="detector_located: keep an end lamp at full when no camera watches the approach "
         "to its zone (whoever comes from there arrives unseen); default true",
     )
+    zone_probability: float | None = Field(
+        default=None, gt=0, lt=1,
+        description="detector_fused: light a zone while P(some street track is in it or enters it within "
+        "the lead) reaches this; default 0.3",
+    )
     schedule: tuple[ScheduleStep, ...] = ()
 
     @model_validator(mode="before")

@@ -14,14 +14,17 @@ from citysim.control.detecting import (
     DetectorPerFrame,
     DetectorTracked,
 )
+from citysim.control.fused import DetectorFused
 from citysim.control.located import DetectorLocated
 from citysim.control.oracle import Oracle
+from citysim.control.oracle_seen import OracleSeen
 from citysim.control.pir import PassiveInfrared
 
 CONTROLLERS: dict[str, type[Controller]] = {
     cls.name: cls
     for cls in (
-        AlwaysOn, Oracle, Schedule, PassiveInfrared, Threshold5, Threshold05,
+        AlwaysOn, Oracle, OracleSeen, Schedule, PassiveInfrared, Threshold5, Threshold05,
         DetectorPerFrame, DetectorConfirmed, DetectorTracked, DetectorNetwork, DetectorLocated,
+        DetectorFused,
     )
 }  # fmt: skip

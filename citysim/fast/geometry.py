@@ -88,8 +88,12 @@ class CameraGeometry:
     """The lamp cameras' poses as arrays, so one numpy pass places every agent for every camera."""
 
     def __init__(self, street: Street):
-        cams = [site.camera for site in street.lamps]
+        # every camera of the street (``Street.cameras``: each pole's own, then the backward ones);
+        # ``camera_lamps[i]`` is the pole camera i hangs on (lamp levels are read per lamp)
+        cams = [site.camera for site in street.cameras]
         self.cameras = cams
+        self.camera_lamps: list[int] = list(street.camera_lamps)
+        self.n_lamps = len(street.lamps)
         self.rays = [CameraRays(c) for c in cams]
         self.pole_xy_m = np.array([[c.position_m[0], c.position_m[1]] for c in cams], dtype=np.float64)
         self.heading_xy = np.array([[c.heading_unit[0], c.heading_unit[1]] for c in cams], dtype=np.float64)
@@ -99,8 +103,9 @@ class CameraGeometry:
         # per camera, the lamps ahead within FAR_VIEW_M other than its own pole's and the neighbours'
         poles_xy = np.array([[site.x_m, site.y_m] for site in street.lamps], dtype=np.float64)
         ahead_m, _ = self._view(poles_xy)
-        lamp = np.arange(len(poles_xy))  # camera i hangs on lamp i
-        self.far_lamps = [np.flatnonzero((ahead_m[:, i] > 0.0) & (ahead_m[:, i] <= FAR_VIEW_M) & (np.abs(lamp - i) >= 2))
+        lamp = np.arange(len(poles_xy))
+        self.far_lamps = [np.flatnonzero((ahead_m[:, i] > 0.0) & (ahead_m[:, i] <= FAR_VIEW_M)
+                                         & (np.abs(lamp - self.camera_lamps[i]) >= 2))
                           for i in range(len(cams))]  # fmt: skip
 
     @property
@@ -206,7 +211,7 @@ class LevelChanges:
 
     def __init__(self, geometry: CameraGeometry):
         self.far_lamps = geometry.far_lamps
-        self.changed_at_s = np.full(geometry.n, -np.inf)
+        self.changed_at_s = np.full(geometry.n_lamps, -np.inf)  # per lamp
         self.levels: np.ndarray | None = None
         self._seen_levels: np.ndarray | None = None
         #: per camera, when a lamp in its far view last changed (None: no far lamps); None: not known yet

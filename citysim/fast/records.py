@@ -111,7 +111,7 @@ class RecordingSensors:
         self.detectors_made = [
             RecordingDetector(Detector(site.camera, model=model, target_threshold=threshold),
                               Segmenter(SegmenterParams(), fps=fps))
-            for site in ctx.street.lamps
+            for site in ctx.street.cameras  # every camera (two per pole with backward cameras)
         ]  # fmt: skip
         return self.detectors_made
 
@@ -128,7 +128,7 @@ class StreetWatch(Collector):
         self.fps = fps
         self.agents: list[AgentState] = []
         self.world_agents: list[AgentState] = []
-        self.levels = np.zeros(geometry.n)
+        self.levels = np.zeros(geometry.n_lamps)  # per lamp
         self.changes = LevelChanges(geometry)
         self._placed = None
 
@@ -185,7 +185,7 @@ class CalibrationRecorder(StreetWatch):
                    "speed_mps": agent.speed_mps, "light": light[a_i], "young": young}  # fmt: skip
             self._add_row({**row, **_decision_values(decided, agent.object_id)})
         self._beam_rows(lamp_index, frame, cand, young, decided)
-        values = {"camera": lamp_index, "frame": frame, "light": float(self.levels[lamp_index]),
+        values = {"camera": lamp_index, "frame": frame, "light": float(self.levels[self.geometry.camera_lamps[lamp_index]]),
                   "has_candidates": len(idx) > 0, "regions": len(recorded.inner.last_regions) > 0,
                   "near_kind": near_kind, "near_forward_m": near_forward_m,
                   "area_fraction": recorded.last_area_fraction, "age_bin": background_age_bin(recorded.last_rate),

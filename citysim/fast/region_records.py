@@ -84,7 +84,7 @@ class RegionRecorder(StreetWatch):
             return  # not judged (the light in view was changing)
         segmenter.fresh = False
         _, near_kind, near_forward_m = self.in_view(lamp_index)
-        values = {"camera": lamp_index, "frame": int(round(t_s * self.fps)), "light": float(self.levels[lamp_index]),
+        values = {"camera": lamp_index, "frame": int(round(t_s * self.fps)), "light": float(self.levels[self.geometry.camera_lamps[lamp_index]]),
                   "near_kind": near_kind, "near_forward_m": near_forward_m,
                   "area_fraction": segmenter.last_area_fraction, "age_bin": background_age_bin(segmenter.last_rate),
                   "far_change_s": self.changes.far_change_age_s(lamp_index, t_s)}  # fmt: skip

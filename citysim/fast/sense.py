@@ -23,8 +23,11 @@ def sense(night, sensors: FastSensors, controller, lamps: Sequence[Lamp], collec
     fps = night.street.lamps[0].camera.fps
     stride = night.scenario.simulation.idle_frame_stride
     lamp_states = controller.ctx.lamp_states
-    n = len(lamps)
-    watch = [list(range(max(0, i - 1), min(n, i + 2))) for i in range(n)]
+    n_lamps = len(lamps)
+    camera_lamps = night.street.camera_lamps  # per camera (two per pole with backward cameras), its pole
+    n = len(camera_lamps)
+    # each camera watches its own pole's lamp and the neighbours' (their light changes its scene)
+    watch = [list(range(max(0, j - 1), min(n_lamps, j + 2))) for j in camera_lamps]
     # bound once: the loop below runs per camera per frame (~300k times an hour)
     on_frame, in_motion = controller.on_frame, controller.cameras_in_motion
     collect = [collector.on_frame for collector in collectors]

@@ -72,7 +72,7 @@ class FastSensors:
         self.any_agents = False  # bool(agents), kept: a replayed step's sequence answers it by a call
         #: ``agents[j]`` as sensing reads them, without a replayed step's snapshots made (``citysim.fast.step_agents``)
         self.step_agents = StepAgents(self.agents)
-        self.levels = np.zeros(self.geometry.n)
+        self.levels = np.zeros(self.geometry.n_lamps)  # per lamp
         #: when the lamps' levels last changed: only the threshold baselines' segmenters read it, so
         #: it is kept (every observed frame) only once one of them is made
         self.changes: LevelChanges | None = None
@@ -250,7 +250,7 @@ class SensedDetector:
                 has_beams = len(beams) > 0
                 if has_beams:
                     detections += self._beams(beams, k, is_young(learning_rate))
-        lit = lamps_lit[i]
+        lit = lamps_lit[s.geometry.camera_lamps[i]]  # the light of the pole camera i hangs on
         if self.fa_left == 0 and self.fa_may_start and self.rng.random() < s.model.fa_start_p[lit]:
             self._start_false_alarm()
         fa = self._false_alarm(k) if self.fa_left else None
@@ -384,7 +384,7 @@ class SensedSegmenter(_LearningRate):
         else:  # nothing in view: what nearest_in_view says of no candidate and no beam
             kind, forward_m = -1, math.nan
         far_s = s.changes.far_change_age_s(i, s.frame_k / s.fps) if kind < 0 else math.inf
-        samples = s.area_samples_of(kind, forward_m, bool(s.lit(i)), background_age_bin(learning_rate), far_s)
+        samples = s.area_samples_of(kind, forward_m, bool(s.lit(s.geometry.camera_lamps[i])), background_age_bin(learning_rate), far_s)
         # the frame's rank among its condition's (sorted) samples: kept from the last judged frame
         # with the model's persistence, so a big region lasts an episode as in the real frames
         if not (s.frame_k == self.last_frame_k + 1 and self.rng.random() < s.model.area_persistence):

@@ -19,7 +19,10 @@ HOW_TO_READ = (
     "Each point is a controller: further right, fewer people walk or drive into a zone whose lamp is "
     "below full level (dimmed counts, though not off); "
     "higher, more energy saved against always-on lamps. The best controllers sit near the "
-    "oracle (perfect knowledge of where everyone is), top right; a point low or to the left "
+    "oracle (perfect knowledge of where everyone is, a star), top right; oracle_seen (a cross) is the "
+    "oracle knowing only what a perfect detector in the scenario's cameras sees: the height from it "
+    "down to a controller is what that controller's cameras saw and it did not use, the height from "
+    "the oracle down to it what no camera can see; a point low or to the left "
     "buys its savings with darkness or its light with energy. The bar through a point spans the "
     "95 % interval of its lit-on-entry rate: how far that rate could be off from this run's road "
     "users alone (few road users, wide bars). always_on and the oracle have no bar: both light every "
@@ -60,14 +63,15 @@ def frontier_figure(controllers: Mapping[str, Mapping], title: str = "savings vs
     order = list(points)
     labels = []
     for name, (x, y) in points.items():
-        oracle = controllers[name].get("controller") == "oracle"
+        kind = controllers[name].get("controller")
+        oracle = kind in ("oracle", "oracle_seen")  # the bound, and the bound for these cameras
         color = "black" if oracle else controller_color(name, order)
         interval = controllers[name].get("lit_on_entry_interval_95")
         if interval is not None and controllers[name].get("controller") not in REFERENCE_CONTROLLERS:
             ax.errorbar([x], [y], xerr=[[x - interval[0]], [interval[1] - x]], fmt="none", ecolor=color,
                         elinewidth=1.0, capsize=3, alpha=0.6, zorder=2)  # fmt: skip
-        ax.scatter([x], [y], s=90 if oracle else 45, marker="*" if oracle else "o", color=color, label=name,
-                   zorder=3)  # fmt: skip
+        marker = {"oracle": "*", "oracle_seen": "P"}.get(kind, "o")
+        ax.scatter([x], [y], s=90 if oracle else 45, marker=marker, color=color, label=name, zorder=3)
         labels.append(Label(name, x, y, color))
     warn_few_objects(fig, n_objects)
     lows = [(c["lit_on_entry_interval_95"][0], points[n][1]) for n, c in controllers.items()
@@ -97,9 +101,10 @@ def sweep_frontier_figure(rows: Sequence[Mapping[str, str]], axis: str | None = 
     order = list(by_controller)
     drawn: list[tuple[float, float]] = []
     for name, pts in by_controller.items():
-        oracle = name == "oracle"
+        oracle = name in ("oracle", "oracle_seen")
         color = "black" if oracle else controller_color(name, order)
-        style = {"s": 60 if oracle else 25, "marker": "*" if oracle else "o", "color": color, "zorder": 3}
+        marker = {"oracle": "*", "oracle_seen": "P"}.get(name, "o")
+        style = {"s": 60 if oracle else 25, "marker": marker, "color": color, "zorder": 3}
         if axis is None:
             ax.scatter([p[0] for p in pts], [p[1] for p in pts], alpha=0.8, label=f"{name} (n={len(pts)})", **style)
             drawn += [(x, y) for x, y, _ in pts]

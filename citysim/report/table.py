@@ -30,6 +30,22 @@ def _interval(c: dict) -> str:
     return f"{100 * interval[0]:.1f}-{100 * interval[1]:.1f}"
 
 
+def split_line(summary: dict) -> str | None:
+    """The gap to the oracle's savings split in two (``oracle_seen`` in the run): what no camera can
+    see, and per camera controller what its cameras saw and it did not use; None without oracle_seen."""
+    controllers = summary["controllers"]
+    seen = next((c for c in controllers.values() if c.get("controller") == "oracle_seen"), None)
+    if seen is None or seen.get("gap_unseen") is None:
+        return None
+    unused = [f"{name} {100 * c['gap_unused']:+.1f} / {100 * c['dark_unused']:+.1f}" for name, c in controllers.items()
+              if c.get("gap_unused") is not None and c.get("dark_unused") is not None
+              and c.get("controller") not in (*REFERENCE_CONTROLLERS, "oracle_seen", "schedule")]  # fmt: skip
+    return (f"the gap to the oracle split (points of the oracle's savings / of zone entries): no camera can see "
+            f"{100 * seen['gap_unseen']:+.1f} / {_pct(seen.get('dark_unseen'))} of entries (oracle_seen: the oracle "
+            f"knowing only what a perfect detector in these cameras sees); the cameras saw and the controller did "
+            f"not use: " + (", ".join(unused) or "-"))
+
+
 def comparison_table(summary: dict) -> str:
     """The planner's two axes first (savings against always-on and the oracle's bound; the share
     of zone entries already lit), then darkness, lag and energy spent on nobody."""
@@ -61,6 +77,9 @@ def comparison_table(summary: dict) -> str:
         blind = ", ".join(f"{a:.0f}-{b:.0f}" for a, b in coverage["blind_stretches_m"]) or "none"
         lines.append(f"camera coverage: {100 * coverage['street_seen']:.0f} % of the lanes and sidewalks in the "
                      f"lamp zones is seen whole within 25 m by some camera; blind stretches (x, m): {blind}")
+    split = split_line(summary)
+    if split:
+        lines.append(split)
     gap = gap_line(summary)
     if gap:
         lines.append(gap)

@@ -159,7 +159,7 @@ def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: 
     frames = merge_columns([frames for _, frames in detector_parts])
     region_frames = merge_columns([frames for (_, frames), night in zip(parts, nights, strict=True)
                                    if night.records_regions])  # fmt: skip
-    camera_hours = duration_s * len(detector_parts) * len(build_street(scenario).lamps) / 3600.0
+    camera_hours = duration_s * len(detector_parts) * len(build_street(scenario).cameras) / 3600.0
     model = fit_sensor_model(rows, frames, camera_hours, key=path.stem,
                              idle_frame_stride=scenario.simulation.idle_frame_stride, area_frames=region_frames)
     model.save(path)

@@ -70,9 +70,11 @@ def needs_sensor_model(specs: Sequence[ControllerSpec]) -> bool:
 
 def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
     """Each controller's savings as a share of the oracle's (1: as much as the bound, None without
-    an oracle or when the oracle saves nothing), placed after ``savings_vs_always_on``."""
+    an oracle or when the oracle saves nothing), placed after ``savings_vs_always_on``; with an
+    ``oracle_seen`` in the comparison also the split of the gap (``gap_split``)."""
     oracle = next((r for r in results.values() if r["controller"] == "oracle"), None)
     bound = oracle["savings_vs_always_on"] if oracle else None
+    seen = next((r for r in results.values() if r["controller"] == "oracle_seen"), None)
     out = {}
     for label, result in results.items():
         share = result["savings_vs_always_on"] / bound if bound else None
@@ -81,7 +83,31 @@ def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
             ordered[key] = value
             if key == "savings_vs_always_on":
                 ordered["savings_vs_oracle"] = share
+                if seen is not None:
+                    ordered.update(gap_split(result, bound, seen))
         out[label] = ordered
+    return out
+
+
+def gap_split(result: dict, oracle_savings: float | None, seen: dict) -> dict:
+    """A controller's gap to the oracle split by ``seen``, oracle_seen's result (the oracle knowing
+    only what a perfect detector in the cameras sees), on both of the planner's axes.
+
+    Savings, in shares of the oracle's savings (None without an oracle saving): ``gap_unseen`` =
+    oracle minus oracle_seen (the same for every controller; below 0 where oracle_seen saves more
+    by not lighting for road users no camera sees) and ``gap_unused`` = oracle_seen minus the
+    controller (energy beyond what a perfect use of its cameras would spend). Lit on entry:
+    ``dark_unseen`` = 1 minus oracle_seen's rate (entries no camera could announce in time) and
+    ``dark_unused`` = oracle_seen's rate minus the controller's (entries its cameras could have
+    announced and it left dark; below 0 where it lights blind entries by other means)."""
+    seen_savings, seen_lit = seen["savings_vs_always_on"], seen.get("lit_on_entry_rate")
+    lit = result.get("lit_on_entry_rate")
+    out = {"gap_unseen": None, "gap_unused": None}
+    if oracle_savings:
+        out = {"gap_unseen": (oracle_savings - seen_savings) / oracle_savings,
+               "gap_unused": (seen_savings - result["savings_vs_always_on"]) / oracle_savings}
+    out["dark_unseen"] = None if seen_lit is None else 1.0 - seen_lit
+    out["dark_unused"] = None if seen_lit is None or lit is None else seen_lit - lit
     return out
 
 

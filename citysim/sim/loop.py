@@ -116,10 +116,6 @@ def _fast_cameras(scenario: Scenario, spec: ControllerSpec, fidelity: str, senso
     fast_cameras = fidelity == "fast" and CONTROLLERS[spec.name].uses_camera
     if fast_cameras and sensor_model is None:
         raise RunError("fidelity: 'fast' needs a calibrated sensor model (citysim calibrate SCENARIO)")
-    if fast_cameras and scenario.lamps.cameras_per_pole > 1:
-        # the sensor model (citysim.fast) knows one camera per lamp
-        raise RunError("fidelity: 'fast' models one camera per pole; lamps.camera.back_heading_deg needs "
-                       "fidelity 'full'")
     return fast_cameras
 
 

@@ -67,10 +67,19 @@ def _lead_time(scenario: Scenario, seconds: float) -> dict[str, float]:
             if c.name == "detector_located"}  # fmt: skip
 
 
+def _zone_probability(scenario: Scenario, p: float) -> dict[str, float]:
+    """Overrides that give every ``detector_fused`` this zone-probability threshold (0 < p < 1)."""
+    if not isinstance(p, (int, float)) or isinstance(p, bool) or not 0 < p < 1:
+        raise ScenarioError(f"zone_probability: a probability between 0 and 1 (exclusive), got {p!r}")
+    return {f"controllers.{i}.zone_probability": float(p) for i, c in enumerate(scenario.controllers)
+            if c.name == "detector_fused"}  # fmt: skip
+
+
 #: Axes that are not one scenario field: name -> (scenario, value) -> dotted-path overrides.
 DERIVED_AXES: dict[str, Callable[[Scenario, Any], dict[str, Any]]] = {
     "traffic_density": _scale_traffic,
     "lead_s": _lead_time,
+    "zone_probability": _zone_probability,
 }
 
 AxisValue = int | float | str | bool
