@@ -17,8 +17,6 @@ import queue
 from pathlib import Path
 from typing import NamedTuple
 
-from tqdm import tqdm
-
 from citysim.config.kinds import TARGET_KINDS
 from citysim.config.scenario import ControllerSpec, Scenario, override
 from citysim.fast.geometry import CameraGeometry
@@ -26,6 +24,7 @@ from citysim.fast.model import MODEL_VERSION, SensorModel, fit_sensor_model
 from citysim.fast.records import CalibrationRecorder, RecordingSensors, merge_columns
 from citysim.fast.region_records import RegionRecorder, RegionSensors
 from citysim.sim.loop import run_controller
+from citysim.sim.progress import SimulatedTimeBar
 from citysim.sim.workers import spawn_pool
 from citysim.world.street import build_street
 
@@ -150,8 +149,8 @@ def calibrate(scenario: Scenario, cache_dir: Path | None = None, *, duration_s: 
     """Render-and-detect the calibration nights, fit the sensor model, cache it; (model, path)."""
     path = model_path(scenario, cache_dir, duration_s, runs)
     nights = calibration_nights(runs)
-    bar = tqdm(total=duration_s * len(nights), unit="sim s", desc=f"calibrating {scenario.name} (full fidelity)",
-               disable=not progress, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}]")
+    bar = SimulatedTimeBar(duration_s * len(nights), f"calibrating {scenario.name} (full fidelity)",
+                           disable=not progress)
     parts = _record_runs(scenario, nights, duration_s, workers, bar)
     bar.close()
     detector_parts = [part for part, night in zip(parts, nights, strict=True) if not night.records_regions]

@@ -19,12 +19,11 @@ from concurrent.futures import as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from tqdm import tqdm
-
 from citysim.config.scenario import Scenario, override
 from citysim.config.year import YearSpec
 from citysim.sim.calibration import sensor_model_for
 from citysim.sim.compare import needs_sensor_model, resolve_controllers, run_comparison
+from citysim.sim.progress import SimulatedTimeBar
 from citysim.sim.workers import spawn_pool
 from citysim.year.factors import target_classes
 
@@ -152,9 +151,8 @@ def build_table(scenario: Scenario, year: YearSpec, dark_hours: Sequence[int], n
     specs = resolve_controllers(scenario, names)
     labels = [s.display_name for s in specs]
     cost = {c: c.duration_s * len(labels) for c in cells}
-    bar = tqdm(total=sum(cost.values()), unit="sim s", disable=not progress,
-               desc=f"{scenario.name}: {len(cells)} hour-runs x {len(labels)} controllers",
-               bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} sim s [{elapsed}<{remaining}, {rate_fmt}]")
+    bar = SimulatedTimeBar(sum(cost.values()), f"{scenario.name}: {len(cells)} hour-runs x {len(labels)} controllers",
+                           disable=not progress)
     start = time.perf_counter()
     # the scenario's own sensor model for every cell: a cell's variant differs in traffic only, but an
     # idle cell (no traffic) lists fewer kinds, so looking its model up by its own key calibrated a
