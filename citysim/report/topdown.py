@@ -10,8 +10,11 @@ With ``coverage`` (``citysim.world.coverage.coverage_grid``) the picture also sh
 lamp camera sees a person whole within the detector's range (green cells) and where it does not
 (red cells), with the blind stretches along the street as red bars on the top edge.
 
-Conventions: world frame of docs/design/architecture.md (x along the street, y across it, m);
-tracks are ``{object_id: (T, 2) array of (x_m, y_m)}``.
+Conventions: world frame of docs/design/architecture.md (x east, y north, m; on the straight
+street x runs along it and y across it); tracks are ``{object_id: (T, 2) array of (x_m, y_m)}``.
+A street whose centreline bends is drawn in the world: its lanes, sidewalks, coverage cells and
+bars follow the centreline (``citysim.report.topdown_curved``); the blind stretches are then
+written out in s, metres along the street.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Polygon, Rectangle
 
+from citysim.report import topdown_curved as curved
 from citysim.world.coverage import CoverageGrid, blind_stretches_m
 from citysim.world.street import Street
 from detector.camera import CameraModel
@@ -87,8 +91,13 @@ def plot_topdown(
     path: str | Path,
     coverage: CoverageGrid | None = None,
 ) -> Path:
-    """Draw the street from above and write it to ``path`` (PNG); returns the path."""
+    """Draw the street from above and write it to ``path`` (PNG); returns the path.
+
+    A street along +x (``Centreline.is_straight_x``) is drawn in x along it and y across it; one
+    whose centreline bends is drawn in the world (x east, y north) by ``_plot_curved``."""
     path = Path(path)
+    if not street.centreline.is_straight_x:
+        return _plot_curved(street, cameras, tracks, path, coverage)
     y_lo, y_hi = street.y_min_m - 6.0, street.y_max_m + 6.0
     span_x = street.length_m + 10.0
     fig = Figure(
@@ -116,6 +125,44 @@ def plot_topdown(
     title = f"Street {street.length_m:.0f} m, {len(street.lamps)} lamps, {len(cameras)} cameras"
     if coverage is not None:
         title += f"; {100 * coverage.seen.mean():.0f} % of lanes and sidewalks seen (green), blind in red"
+    ax.set_title(title)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, format="png")
+    return path
+
+
+def _plot_curved(
+    street: Street,
+    cameras: Sequence[CameraModel],
+    tracks: Mapping[int, np.ndarray] | None,
+    path: Path,
+    coverage: CoverageGrid | None,
+) -> Path:
+    """``plot_topdown`` of a street whose centreline bends: strips, coverage cells and bars follow the
+    centreline (``citysim.report.topdown_curved``), the rest stands where it is in the world; the
+    axes span the street's world bounding box at equal scale."""
+    bbox = curved.street_bbox_m(street)
+    fig = Figure(figsize=curved.figsize_in(bbox), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 1, 1)
+    ax.set_facecolor("#c9d7b8")  # verge
+    curved.draw_strips(ax, street)
+    _draw_scenery(ax, street)
+    if coverage is not None:
+        curved.draw_coverage(ax, coverage, street)
+    _draw_cameras(ax, cameras)
+    _draw_lamps(ax, street, 0.0, zone_bar=curved.zone_bar_xy(street))
+    if tracks:
+        _draw_tracks(ax, fig, tracks)
+    ax.set_xlim(bbox[0], bbox[1])
+    ax.set_ylim(bbox[2], bbox[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel("x east (m)")
+    ax.set_ylabel("y north (m)")
+    title = f"Street {street.length_m:.0f} m along its centreline, {len(street.lamps)} lamps, {len(cameras)} cameras"
+    if coverage is not None:
+        title += f"\n{100 * coverage.seen.mean():.0f} % of lanes and sidewalks seen (green), blind in red"
     ax.set_title(title)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -233,8 +280,9 @@ def _draw_cameras(ax: Axes, cameras: Sequence[CameraModel]) -> None:
         )
 
 
-def _draw_lamps(ax: Axes, street: Street, y_lo: float) -> None:
-    """Lamps as stars with their index, and each lamp's zone as a bar along the bottom edge."""
+def _draw_lamps(ax: Axes, street: Street, y_lo: float, zone_bar=None) -> None:
+    """Lamps as stars with their index, and each lamp's zone as a bar along the bottom edge (at
+    ``y_lo + 1`` m), or along the world line ``zone_bar(s0_m, s1_m) -> (xs, ys)`` when given."""
     if not street.lamps:
         return
     ax.scatter(
@@ -249,7 +297,10 @@ def _draw_lamps(ax: Axes, street: Street, y_lo: float) -> None:
         label="lamp",
     )
     for lamp in street.lamps:
-        ax.plot([lamp.zone_start_m, lamp.zone_end_m], [y_lo + 1.0, y_lo + 1.0], lw=3, zorder=5)
+        if zone_bar is None:
+            ax.plot([lamp.zone_start_m, lamp.zone_end_m], [y_lo + 1.0, y_lo + 1.0], lw=3, zorder=5)
+        else:
+            ax.plot(*zone_bar(lamp.zone_start_m, lamp.zone_end_m), lw=3, zorder=5, gid="zone")
         ax.annotate(
             str(lamp.index),
             (lamp.x_m, lamp.y_m),
