@@ -151,6 +151,17 @@ def _no_best(city: Mapping) -> str:
             + ")")
 
 
+def _pays_back(city: Mapping) -> str:
+    """How many ranked streets' best controller pays back within the hardware's lifetime."""
+    life = city["money"]["lifetime_years"]
+    paid = [r for r in city["ranking"] if r["payback_years"] is not None and r["payback_years"] <= life]
+    ranked = [r for r in city["ranking"] if r["controller"] is not None]
+    return (f"Of the {len(ranked)} streets with a best controller, {len(paid)} pay back within the hardware's "
+            f"{life:g}-year lifetime at the default costs; on the others the sensors cost more than the energy "
+            "they save over that lifetime (a negative NPV).") if len(paid) < len(ranked) else (
+            f"Every ranked street pays back within the hardware's {life:g}-year lifetime.")
+
+
 def city_section(results_dir: Path = RESULTS_DIR) -> str:
     """docs/guide/city.md's generated section: the extract's city, its map, ranking and streets."""
     city, city_90 = CITY.load(results_dir), CITY_90.load(results_dir)
@@ -158,7 +169,7 @@ def city_section(results_dir: Path = RESULTS_DIR) -> str:
     return "\n".join([
         f"With the default `--min-lit-on-entry {city['min_lit_on_entry']:g}`, {_no_best(city)}. The map, the "
         f"ranking and the table below are the same streets' years ranked with `--min-lit-on-entry "
-        f"{city_90['min_lit_on_entry']:g}`; {_no_best(city_90)}.",
+        f"{city_90['min_lit_on_entry']:g}`; {_no_best(city_90)}. {_pays_back(city_90)}",
         "",
         f"![{city_90['city']}: streets coloured by payback, lamps as dots](../results/{CITY_MAP})",
         "",
