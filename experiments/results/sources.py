@@ -89,8 +89,9 @@ CITY_90 = Source(
 )
 CITY_TIMING = Source(
     file="city_duesseldorf_wersten_timing.json",
-    command="python -m experiments.results.city_timing runs/w1 runs/w2 runs/b1 runs/b2 (each folder a city run "
-            "under /usr/bin/time -v -o DIR.time.log; measurement A: --workers 1, then 2; B: 2, then 1)",
+    command="python -m experiments.results.city_timing runs/w1 runs/w2 runs/b1 runs/b2 runs/c1 runs/c2 (each "
+            "folder a city run under /usr/bin/time -v -o DIR.time.log; measurements A and C: --workers 1, then 2; "
+            "B: 2, then 1)",
     produced="experiments/results/city_duesseldorf_wersten_timing.json",
     what="wall and CPU time and each worker's memory of the city's year with 1 and with 2 workers",
 )
