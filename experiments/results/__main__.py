@@ -1,9 +1,10 @@
 """`python -m experiments.results` (`make results`): the results page and its figures, from committed files.
 
 Writes docs/results/index.md, docs/results/frontier_year.png (also the README's headline picture)
-and docs/results/frontier_night.png from the result files in experiments/results/. With
-``--check`` it writes nothing and exits 1 naming every file that differs from what it would
-write (CI runs it so).
+and docs/results/frontier_night.png from the result files in experiments/results/, the figures of
+the shipped OpenStreetMap street and city beside them, and the generated sections of the pages
+that show those (``experiments.results.sections``). With ``--check`` it writes nothing and exits
+1 naming every file that differs from what it would write (CI runs it so).
 """
 
 from __future__ import annotations
@@ -15,7 +16,9 @@ from pathlib import Path
 
 from experiments.results.figures import frontier_png
 from experiments.results.pages import results_page
+from experiments.results.sections import DOCS_DIR, stale_sections, write_sections
 from experiments.results.sources import NIGHT, RESULTS_DIR, YEAR
+from experiments.results.street_pages import street_figures
 
 #: docs/results/ of the project.
 DOCS_RESULTS = RESULTS_DIR.parents[1] / "docs" / "results"
@@ -36,7 +39,7 @@ def write_results(out_dir: Path, results_dir: Path = RESULTS_DIR) -> list[Path]:
                frontier_png(night["controllers"], "suburban_night: one whole night", out_dir / NIGHT_FIGURE)]
     page = out_dir / "index.md"
     page.write_text(results_page(year, night, captions))
-    return [page, *written]
+    return [page, *written, *street_figures(out_dir, results_dir)]
 
 
 def stale_files(docs_results: Path = DOCS_RESULTS, results_dir: Path = RESULTS_DIR) -> list[str]:
@@ -54,13 +57,13 @@ def main(argv: list[str] | None = None) -> int:
                    help="write nothing; exit 1 when a committed page or figure is out of date")
     args = p.parse_args(argv)
     if args.check:
-        stale = stale_files()
+        stale = [f"{DOCS_RESULTS}/{name}" for name in stale_files()] + [f"{DOCS_DIR}/{p}" for p in stale_sections()]
         if stale:
-            print(f"out of date in {DOCS_RESULTS}: {', '.join(stale)} (run: make results)", file=sys.stderr)
+            print(f"out of date: {', '.join(stale)} (run: make results)", file=sys.stderr)
             return 1
-        print(f"{DOCS_RESULTS}: up to date")
+        print(f"{DOCS_RESULTS} and the generated sections of {DOCS_DIR}: up to date")
         return 0
-    for path in write_results(DOCS_RESULTS):
+    for path in [*write_results(DOCS_RESULTS), *write_sections()]:
         print(f"written: {path}")
     return 0
 

@@ -25,8 +25,12 @@ RECALIBRATE = ("calibrate it again: citysim calibrate scenarios/{name}.yaml --ca
 
 
 def _scenario_of(path: Path):
+    """(name, key, scenario) of a shipped model: its scenario file is scenarios/NAME.yaml, else the
+    one scenarios/*/NAME.yaml (an imported street's, e.g. scenarios/osm/)."""
     name, _, key = path.stem.rpartition("-")
-    return name, key, load_scenario(SCENARIOS / f"{name}.yaml")
+    found = [SCENARIOS / f"{name}.yaml"] if (SCENARIOS / f"{name}.yaml").exists() else sorted(SCENARIOS.glob(f"*/{name}.yaml"))
+    assert len(found) == 1, f"{path.name}: no single scenario file named {name}.yaml under {SCENARIOS}: {found}"
+    return name, key, load_scenario(found[0])
 
 
 def test_suburban_night_the_demo_scenario_ships_a_model():
