@@ -9,7 +9,7 @@ TEST_STAMP := $(VENV)/.installed-test
 # the docs tools (MkDocs, Material, mkdocstrings) only for the docs site
 DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install demo demo-night test bench bench-night lint docs results results-check clean
+.PHONY: install demo demo-night test test-slow bench bench-night lint docs results results-check clean
 
 install: $(STAMP)
 
@@ -41,9 +41,14 @@ demo: $(STAMP)
 demo-night: $(STAMP)
 	$(PY) -m experiments.demo --controllers all
 
-# one worker per core; a test file stays on one worker, so its module fixtures run once
+# one worker per core; a test file stays on one worker, so its module fixtures run once. The tests
+# marked slow (real processes signalled, Dask clusters, cities, renders of a minute) are
+# `make test-slow`, which CI runs too: together they would pass the 5 minutes the suite is held to
 test: $(TEST_STAMP)
-	$(PY) -m pytest -n auto --dist loadfile
+	$(PY) -m pytest -n auto --dist loadfile -m "not slow"
+
+test-slow: $(TEST_STAMP)
+	$(PY) -m pytest -n auto --dist loadfile -m slow
 
 # Figures, not pass/fail: detector vs OpenCV's floor, renderer, simulation speed, sweep scaling.
 bench: $(STAMP)

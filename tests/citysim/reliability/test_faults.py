@@ -24,7 +24,7 @@ def test_a_worker_killed_mid_run_fails_the_run_naming_its_controller(tmp_path):
     try:
         wait_for(lambda: len(workers(proc.pid)) == 2 and list(tmp_path.glob(".run.partial-*/**/.parts/*.csv")), proc,
                  "the workers simulating (a controller's part file written)")  # fmt: skip
-        victim = workers(proc.pid)[0]
+        victim = _busiest(workers(proc.pid))  # a worker mid-task: an idle one has no controller to name
         os.kill(victim, signal.SIGKILL)
         _, err = proc.communicate(timeout=120)
     finally:
@@ -40,6 +40,22 @@ def test_a_worker_killed_mid_run_fails_the_run_naming_its_controller(tmp_path):
                 "--controllers", "pir", "--workers", "2", "--no-progress")  # fmt: skip
     assert again.returncode == 0, again.stderr
     assert (out / "summary.json").exists() and (out / "report.html").exists()
+
+
+def _cpu_ticks(pid: int) -> int:
+    """User + system clock ticks the process has used so far (/proc/PID/stat fields 14 and 15)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return int(fields[11]) + int(fields[12])
+
+
+def _busiest(pids: list[int], window_s: float = 1.0) -> int:
+    """The process of ``pids`` that used the most CPU over ``window_s``: the one running a task
+    (a pool worker waiting for its next task sleeps)."""
+    import time
+
+    before = {pid: _cpu_ticks(pid) for pid in pids}
+    time.sleep(window_s)
+    return max(pids, key=lambda pid: _cpu_ticks(pid) - before[pid])
 
 
 def _small_disk(tmp_path: Path) -> tuple[Path, list[str], object]:
