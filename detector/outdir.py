@@ -203,13 +203,19 @@ def staged_output(out_dir: str | Path) -> Iterator[Path]:
         shutil.rmtree(stage, ignore_errors=True)
         _remove_made(made)
         raise
+    _replace_items(stage, out)
+    shutil.rmtree(stage, ignore_errors=True)
+
+
+def _replace_items(stage: Path, out: Path) -> None:
+    """Move every file and folder of ``stage`` into ``out`` (made if missing), replacing its
+    namesakes there one by one."""
     out.mkdir(parents=True, exist_ok=True)
     for item in stage.iterdir():
         target = out / item.name
         if target.is_dir() and not target.is_symlink():
             shutil.rmtree(target)
         item.replace(target)
-    shutil.rmtree(stage, ignore_errors=True)
 
 
 def _move_aside_and_in(stage: Path, out: Path, aside: Path) -> None:
@@ -225,12 +231,7 @@ def _move_aside_and_in(stage: Path, out: Path, aside: Path) -> None:
     except OSError:  # out a mount point or a symlink: its files are replaced one by one
         if aside.exists() and not out.exists():
             aside.rename(out)
-        out.mkdir(parents=True, exist_ok=True)
-        for item in stage.iterdir():
-            target = out / item.name
-            if target.is_dir() and not target.is_symlink():
-                shutil.rmtree(target)
-            item.replace(target)
+        _replace_items(stage, out)
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
 
