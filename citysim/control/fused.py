@@ -33,7 +33,13 @@ from citysim.control.fusion.street_frame import StreetFrame
 from citysim.control.fusion.tracker import StreetTracker
 from citysim.control.fusion.views import CameraViews
 from citysim.control.fusion.zones import zone_probabilities
-from citysim.control.located import CLASS_MARGIN_S, LANE_PRIOR_MPS, LANE_SLACK_M, blind_end_lamps
+from citysim.control.located import (
+    CLASS_MARGIN_S,
+    LANE_PRIOR_MPS,
+    LANE_SLACK_M,
+    blind_end_lamps,
+    keep_blind_ends_full,
+)
 from citysim.control.track_windows import frame_hit
 from citysim.world.agents import AgentState
 
@@ -119,10 +125,7 @@ class DetectorFused(DetectorPerFrame):
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)
-        if self.blind_end_lamps and t_s >= self.next_blind_end_s:
-            self.next_blind_end_s = t_s + 1.0
-            for j in self.blind_end_lamps:
-                self.bank.trigger(j, t_s)
+        keep_blind_ends_full(self, t_s)
         if t_s < self.next_decision_s:
             return
         self.next_decision_s = t_s + self.decide_every_s

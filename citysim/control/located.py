@@ -147,6 +147,15 @@ def blind_end_lamps(street: Street) -> list[int]:
     return ends
 
 
+def keep_blind_ends_full(controller, t_s: float) -> None:
+    """Re-trigger ``controller``'s ``blind_end_lamps`` (full level) once a simulated second, its
+    ``next_blind_end_s`` (s) the next time; shared by ``detector_located`` and ``detector_fused``."""
+    if controller.blind_end_lamps and t_s >= controller.next_blind_end_s:
+        controller.next_blind_end_s = t_s + 1.0
+        for j in controller.blind_end_lamps:
+            controller.bank.trigger(j, t_s)
+
+
 class DetectorLocated(DetectorPerFrame):
     """The detector's confirmed tracks placed on the street; their zones and the zones ahead lit."""
 
@@ -293,10 +302,7 @@ class DetectorLocated(DetectorPerFrame):
 
     def on_physics_step(self, t_s: float, agents: Sequence[AgentState]) -> None:
         super().on_physics_step(t_s, agents)
-        if self.blind_end_lamps and t_s >= self.next_blind_end_s:
-            self.next_blind_end_s = t_s + 1.0
-            for j in self.blind_end_lamps:
-                self.bank.trigger(j, t_s)
+        keep_blind_ends_full(self, t_s)
         if t_s < self.next_extrapolation_s:
             return
         self.next_extrapolation_s = t_s + 0.25
