@@ -111,6 +111,9 @@ def calibration_key(scenario: Scenario, duration_s: float, runs: int) -> str:
         "calibration": {"duration_s": duration_s, "runs": runs, "nights": calibration_nights(runs),
                         "region_sizes_from": "region nights"},
     }
+    backs = [site.back_camera.model_dump(mode="json") for site in street.lamps if site.back_camera is not None]
+    if backs:  # only then, so a one-camera-per-pole street keeps the key it had before backward cameras existed
+        parts["back_cameras"] = backs
     return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 

@@ -106,6 +106,14 @@ def test_the_cache_key_follows_cameras_and_environment_not_seed_or_rates(scenari
     assert calibration_key(scenario, 120.0, 1) != key
 
 
+def test_the_cache_key_follows_the_backward_cameras(scenario):
+    # a second camera per pole sees other ground and other false alarms: its own model
+    key = calibration_key(scenario, 60.0, 1)
+    back = calibration_key(override(scenario, {"lamps.camera.back_heading_deg": 188}), 60.0, 1)
+    assert back != key
+    assert calibration_key(override(scenario, {"lamps.camera.back_heading_deg": 170}), 60.0, 1) not in (key, back)
+
+
 def test_a_cached_model_is_loaded_not_recalibrated(scenario, tmp_path, monkeypatch):
     model = constant_model(0.3)
     model.save(model_path(scenario, tmp_path, calibration.DEFAULT_DURATION_S, calibration.DEFAULT_RUNS))
