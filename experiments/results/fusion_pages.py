@@ -28,6 +28,10 @@ TARGET_LIT = 0.99
 COMMAND = "python -m experiments.fusion_runs"
 
 
+def _runs(n: int) -> str:
+    return f"{n} run" if n == 1 else f"{n} runs"
+
+
 def load_runs(results_dir: Path, scenario: str, fidelity: str) -> list[dict]:
     """The scenario's 1,200 s runs in ``fidelity`` that exist, in table order (22:00 seeds 1-3, then 02:00)."""
     runs = []
@@ -88,7 +92,7 @@ def pooled_lines(runs: Sequence[Mapping]) -> list[str]:
         if p["gap_unused"] is not None and p["dark_unused"] is not None)  # fmt: skip
     unseen = pooled(runs, "oracle_seen")
     return [
-        f"Pooled over the {len(runs)} runs ({fused['entries']} zone entries): {rows} (share of the oracle's "
+        f"Pooled over the {_runs(len(runs))} ({fused['entries']} zone entries): {rows} (share of the oracle's "
         f"savings at lit on entry).",
         f"Target for detector_fused: >= {TARGET_SHARE:.2f} of the oracle's savings "
         f"({'met' if share_ok else 'missed'}: {fused['share']:.3f}) with >= {fmt_pct(TARGET_LIT, 0)} lit on entry "
@@ -106,7 +110,7 @@ def agreement_lines(full: Sequence[Mapping], fast: Sequence[Mapping]) -> list[st
     if not matched:
         return ["Fast mode against full fidelity: no run measured both ways."]
     figures = compare_figures([m[0] for m in matched], [m[1] for m in matched])
-    lines = [f"Fast mode against full fidelity, the same {len(matched)} runs (seeds 1-3, no calibration seed), "
+    lines = [f"Fast mode against full fidelity, the same {_runs(len(matched))} (seeds 1-3, no calibration seed), "
              "means over the runs (`citysim validate`'s tolerances: savings within 2 points, lit on entry within "
              "1 point):", "",
              "| controller | savings full / fast | lit on entry full / fast |", "|---|---|---|"]  # fmt: skip
@@ -148,3 +152,21 @@ def fusion_section(results_dir: Path) -> str:
         out += (run_table(fast) + [""] + pooled_lines(fast) if fast else ["Not measured."]) + [""]
         out += agreement_lines(full, fast) + ["", night_line(results_dir, scenario), ""]
     return "\n".join(out).rstrip() + "\n"
+
+
+def fusion_summary_section(results_dir: Path) -> str:
+    """docs/guide/fusion.md's generated summary: each scenario's full-fidelity runs pooled, one sentence."""
+    lines = []
+    for scenario in SCENARIOS:
+        runs = load_runs(results_dir, scenario, "full")
+        if not runs:
+            lines.append(f"- {scenario}: not measured.")
+            continue
+        cells = "; ".join(f"{label} {p['share']:.2f} of the oracle's savings at {fmt_pct(p['lit'])} lit on entry"
+                          for label in SHOWN[1:] for p in [pooled(runs, label)])  # fmt: skip
+        oracle = sum(r["controllers"]["oracle"]["savings_vs_always_on"] for r in runs) / len(runs)
+        lines.append(f"- **{scenario}** ({_runs(len(runs))} of 1,200 s at full fidelity, "
+                     f"{pooled(runs, 'oracle')['entries']} zone entries; the oracle saves {fmt_pct(oracle)} "
+                     f"of always-on's energy on average): {cells}.")
+    return ("Measured (every run, fast mode beside full fidelity and the whole nights: "
+            "[design: fusion](../design/fusion.md#measurements)):\n\n" + "\n".join(lines) + "\n")

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from experiments.results.fusion_pages import fusion_section
+from experiments.results.fusion_pages import fusion_section, fusion_summary_section
 from experiments.results.sources import RESULTS_DIR
 from experiments.results.street_pages import city_section, osm_street_section, timing_section
 
@@ -57,6 +57,7 @@ SECTIONS = (
     Section("guide/city.md", "osm_city", city_section),
     Section("design/city.md", "osm_city_timing", timing_section),
     Section("design/fusion.md", "fusion_table", fusion_section),
+    Section("guide/fusion.md", "fusion_summary", fusion_summary_section),
 )
 
 
