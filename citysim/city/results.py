@@ -69,6 +69,12 @@ def ranking(rows: Sequence[dict]) -> list[dict]:
              else None} for i, r in enumerate(sorted(rows, key=order))]  # fmt: skip
 
 
+def city_total(values: list[float | None]) -> float | None:
+    """The city's sum of one figure over its streets; None where no street has it (a bound's capex)."""
+    given = [v for v in values if v is not None]
+    return sum(given) if given else None
+
+
 def city_result(name: str, jobs: Sequence[StreetJob], years: Sequence[dict], min_lit_on_entry: float,
                 city_file: str) -> dict:  # fmt: skip
     """city.json's dict from the jobs and their streets' year.json dicts (same order)."""
@@ -76,7 +82,7 @@ def city_result(name: str, jobs: Sequence[StreetJob], years: Sequence[dict], min
     rows = [street_row(job, year, geo, min_lit_on_entry) for job, year, geo in zip(jobs, years, geometry, strict=True)]
     first = years[0]
     labels = list(dict.fromkeys(label for y in years for label in y["controllers"]))
-    totals = {label: {k: sum(r["controllers"][label][k] or 0.0 for r in rows if label in r["controllers"])
+    totals = {label: {k: city_total([r["controllers"][label][k] for r in rows if label in r["controllers"]])
                       for k in ("energy_kwh_per_year", "capex", "opex_per_year", "npv", "co2_avoided_kg_over_lifetime")}
               for label in labels}  # fmt: skip
     return {

@@ -89,10 +89,27 @@ def plural(count: int, one: str, many: str) -> str:
     return f"{count} {one if count == 1 else many}"
 
 
+#: Letters spelled out in ASCII rather than stripped of their marks: German's umlauts and sharp s as
+#: German writes them without (Geißlerweg -> Geisslerweg, Südring -> Suedring), and Latin letters
+#: that Unicode's NFKD does not take apart into a base letter and a mark (ø, ł, æ, ...).
+SPELLED_OUT = {
+    "ß": "ss", "ẞ": "SS", "ä": "ae", "ö": "oe", "ü": "ue", "Ä": "Ae", "Ö": "Oe", "Ü": "Ue",
+    "æ": "ae", "Æ": "Ae", "œ": "oe", "Œ": "Oe", "ø": "o", "Ø": "O", "ł": "l", "Ł": "L",
+    "đ": "d", "Đ": "D", "ð": "d", "Ð": "D", "þ": "th", "Þ": "Th", "ı": "i",
+}  # fmt: skip
+
+
+def ascii_name(name: str) -> str:
+    """``name`` in ASCII: the letters of ``SPELLED_OUT`` spelled out, every other accented letter
+    without its accents (NFKD: é -> e, č -> c); characters with no ASCII form are dropped."""
+    spelled = "".join(SPELLED_OUT.get(ch, ch) for ch in unicodedata.normalize("NFC", str(name)))
+    return unicodedata.normalize("NFKD", spelled).encode("ascii", "ignore").decode()
+
+
 def slug(name: str) -> str:
-    """A scenario name from a street name: ASCII letters, digits and underscores ('ß' -> 'ss')."""
-    ascii_name = unicodedata.normalize("NFKD", name.replace("ß", "ss")).encode("ascii", "ignore").decode()
-    return re.sub(r"[^A-Za-z0-9]+", "_", ascii_name).strip("_").lower() or "street"
+    """A scenario name from a street name: lower-case ASCII letters, digits and underscores
+    (``ascii_name``: 'Geißlerweg' -> 'geisslerweg', 'Südring' -> 'suedring')."""
+    return re.sub(r"[^A-Za-z0-9]+", "_", ascii_name(name)).strip("_").lower() or "street"
 
 
 def finish_street(street: ImportedStreet, clear: bool = False) -> ImportedStreet:

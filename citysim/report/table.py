@@ -35,7 +35,7 @@ def split_line(summary: dict) -> str | None:
     see, and per camera controller what its cameras saw and it did not use; None without oracle_seen."""
     controllers = summary["controllers"]
     seen = next((c for c in controllers.values() if c.get("controller") == "oracle_seen"), None)
-    if seen is None or seen.get("gap_unseen") is None:
+    if seen is None or seen.get("gap_unseen") is None or oracle_saves_nothing(controllers):
         return None
     unused = [f"{name} {100 * c['gap_unused']:+.1f} / {100 * c['dark_unused']:+.1f}" for name, c in controllers.items()
               if c.get("gap_unused") is not None and c.get("dark_unused") is not None

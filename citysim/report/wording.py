@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from citysim.report.runfacts import ZERO_SAVINGS
+from citysim.sim.compare import ORACLE_SAVES_NOTHING_BELOW
 
 __all__ = [
     "BELOW_FULL",
@@ -101,11 +102,15 @@ def over_oracle_note(controllers: Mapping[str, Mapping]) -> str | None:
 
 def oracle_saves_nothing(controllers: Mapping[str, Mapping]) -> str | None:
     """The note replacing a savings-vs-oracle column whose bound saves nothing (the oracle's own
-    saving against always-on at or below zero: its sensing power outweighs its dimming, as on a
-    short or busy run), where a share of it would read as nonsense; None when the bound saves."""
+    saving against always-on below ``ORACLE_SAVES_NOTHING_BELOW``, where summary.json's
+    ``savings_vs_oracle`` is None: its lamps at full nearly the whole run, as on a short or busy
+    run), where a share of it would read as nonsense; None when the bound saves (or the run has no
+    oracle)."""
     oracle = next((f for label, f in controllers.items() if _kind(label, f) == "oracle"), None)
     saving = None if oracle is None else oracle.get("savings_vs_always_on")
-    if saving is None or saving >= ZERO_SAVINGS:
+    if saving is None or saving >= ORACLE_SAVES_NOTHING_BELOW:
         return None
-    return (f"vs oracle not given: the oracle saves {100 * saving:.1f} % against always-on on this run (its "
-            "sensing power outweighs its dimming), so there is no saving to take a share of.")
+    why = ("its sensing power outweighs its dimming" if saving < ZERO_SAVINGS
+           else "its lamps were at full nearly the whole run")  # fmt: skip
+    return (f"vs oracle not given: the oracle saves {100 * saving:.1f} % against always-on on this run, less "
+            f"than {100 * ORACLE_SAVES_NOTHING_BELOW:g} % ({why}), so there is no saving to take a share of.")

@@ -78,7 +78,7 @@ MONEY_HEAD = ["controller", "capex", "opex / year", "saved / year", "payback", "
 #: How to read each money column, one sentence each (report.html prints them under the money table).
 MONEY_HOWTO = (
     ("capex", "what fitting every pole of the street with the controller's hardware costs once "
-     "(hardware plus installation per pole; always-on needs none)"),
+     "(hardware plus installation per pole; always-on needs none, and the oracle cannot be bought)"),
     ("opex / year", "the hardware's yearly upkeep over all poles"),
     ("saved / year", "the first year's net saving against always-on: the energy saved at the first "
      "year's price minus the upkeep (negative: the upkeep costs more than the light it saves)"),
@@ -91,19 +91,41 @@ MONEY_HOWTO = (
 )
 
 
+#: Controllers that are no investment (by label), the money columns that do not apply to them (a
+#: dash, whatever an older year.json holds) and why, said beside the table.
+NO_INVESTMENT = {
+    "always_on": (("payback",), "always_on is the reference every figure is measured against: it needs no "
+                  "investment, so it has no payback (-)"),
+    "oracle": (("capex", "opex / year", "payback", "NPV"), "The oracle is a bound (it knows where every road "
+               "user is), not something one can install: no capex, upkeep, payback or NPV (-); its saved / year "
+               "and CO2 avoided are the most any controller could save, before upkeep"),
+    "oracle_seen": (("capex", "opex / year", "payback", "NPV"), "oracle_seen is a bound too (the oracle on what "
+                    "a perfect detector in the cameras sees): no capex, upkeep, payback or NPV (-)"),
+}  # fmt: skip
+
+
 def money_rows(result: dict) -> list[list[str]]:
-    """One row per controller of the money figures (``citysim.year.money``); [] for a year.json without them."""
+    """One row per controller of the money figures (``citysim.year.money``); [] for a year.json
+    without them. A figure that does not apply (``NO_INVESTMENT``) is a dash; a payback never
+    reached is 'never'."""
     cur = result["currency"]
     rows = []
     for label, f in result["controllers"].items():
         if "capex" not in f:
             return []
         payback = f["payback_years"]
-        rows.append([label, fmt_quantity(f["capex"], cur), fmt_quantity(f["opex_per_year"], cur),
-                     fmt_quantity(f["money_saved_per_year"], cur),
-                     "never" if payback is None else f"{payback:.1f} y", fmt_quantity(f["npv"], cur),
-                     fmt_quantity(f["co2_avoided_kg_over_lifetime"], "kg")])  # fmt: skip
+        row = [label, fmt_quantity(f["capex"], cur), fmt_quantity(f["opex_per_year"], cur),
+               fmt_quantity(f["money_saved_per_year"], cur), "never" if payback is None else f"{payback:.1f} y",
+               fmt_quantity(f["npv"], cur), fmt_quantity(f["co2_avoided_kg_over_lifetime"], "kg")]  # fmt: skip
+        for column in NO_INVESTMENT.get(label, ((), ""))[0]:
+            row[MONEY_HEAD.index(column)] = "-"
+        rows.append(row)
     return rows
+
+
+def no_investment_notes(result: dict) -> list[str]:
+    """Why the dashes in the money table: one sentence per controller of ``NO_INVESTMENT`` in it."""
+    return [NO_INVESTMENT[label][1] + "." for label in result["controllers"] if label in NO_INVESTMENT]
 
 
 def money_facts(result: dict) -> str:
@@ -153,7 +175,7 @@ def year_table(result: dict) -> str:
         widths = [max(len(r[i]) for r in rows) for i in range(len(MONEY_HEAD))]
         lines = ["  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True)))
                  for r in rows]  # fmt: skip
-        out += ["", lines[0], "-" * len(lines[0]), *lines[1:], money_facts(result)]
+        out += ["", lines[0], "-" * len(lines[0]), *lines[1:], money_facts(result), *no_investment_notes(result)]
     return "\n".join(out)
 
 
@@ -230,4 +252,5 @@ def _money(r: dict) -> str:
         return ""
     howto = "".join(f"<li><b>{html.escape(col)}</b>: {html.escape(text)}.</li>" for col, text in MONEY_HOWTO)
     return ("<h3>Money against always-on</h3>" + _html_table(MONEY_HEAD, rows)
-            + f"<p class='howto'>{html.escape(money_facts(r))}</p><ul class='howto'>{howto}</ul>")
+            + f"<p class='howto'>{html.escape(' '.join([money_facts(r), *no_investment_notes(r)]))}</p>"
+            + f"<ul class='howto'>{howto}</ul>")

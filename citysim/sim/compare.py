@@ -68,12 +68,26 @@ def needs_sensor_model(specs: Sequence[ControllerSpec]) -> bool:
     return any(CONTROLLERS[s.name].uses_camera for s in specs)
 
 
+#: The oracle's savings against always-on (a share) below which it saves nothing to take a share of:
+#: ``savings_vs_oracle`` and the gap split are None. Reasoning: docs/design/frontier-and-hold.md.
+ORACLE_SAVES_NOTHING_BELOW = 0.01
+
+
+def oracle_bound(results: dict[str, dict]) -> float | None:
+    """The oracle's savings against always-on in ``results`` (label -> figures with ``controller``
+    and ``savings_vs_always_on``, a share), the bound every other saving is a share of; None without
+    an oracle or when it saves less than ``ORACLE_SAVES_NOTHING_BELOW``."""
+    oracle = next((r for r in results.values() if r.get("controller") == "oracle"), None)
+    saving = None if oracle is None else oracle.get("savings_vs_always_on")
+    return saving if saving is not None and saving >= ORACLE_SAVES_NOTHING_BELOW else None
+
+
 def with_savings_vs_oracle(results: dict[str, dict]) -> dict[str, dict]:
-    """Each controller's savings as a share of the oracle's (1: as much as the bound, None without
-    an oracle or when the oracle saves nothing), placed after ``savings_vs_always_on``; with an
-    ``oracle_seen`` in the comparison also the split of the gap (``gap_split``)."""
-    oracle = next((r for r in results.values() if r["controller"] == "oracle"), None)
-    bound = oracle["savings_vs_always_on"] if oracle else None
+    """Each controller's savings as a share of the oracle's (1: as much as the bound; None without
+    an oracle or when the oracle saves nothing, ``oracle_bound``), placed after
+    ``savings_vs_always_on``; with an ``oracle_seen`` in the comparison also the split of the gap
+    (``gap_split``)."""
+    bound = oracle_bound(results)
     seen = next((r for r in results.values() if r["controller"] == "oracle_seen"), None)
     out = {}
     for label, result in results.items():
@@ -93,7 +107,7 @@ def gap_split(result: dict, oracle_savings: float | None, seen: dict) -> dict:
     """A controller's gap to the oracle split by ``seen``, oracle_seen's result (the oracle knowing
     only what a perfect detector in the cameras sees), on both of the planner's axes.
 
-    Savings, in shares of the oracle's savings (None without an oracle saving): ``gap_unseen`` =
+    Savings, in shares of the oracle's savings (None where ``oracle_bound`` is None): ``gap_unseen`` =
     oracle minus oracle_seen (the same for every controller; below 0 where oracle_seen saves more
     by not lighting for road users no camera sees) and ``gap_unused`` = oracle_seen minus the
     controller (energy beyond what a perfect use of its cameras would spend). Lit on entry:

@@ -17,6 +17,12 @@ Every figure compares a controller with always-on lamps on the same street and y
   within the year it is reached (``capex / N_1`` when ``g = 0``); 0 without capex; None if it
   is not reached within ``MAX_PAYBACK_YEARS`` (the saving never covers the outlay);
 * ``co2_avoided_kg_over_lifetime = S x c x L`` with ``c`` the grid's kg CO2 per kWh.
+
+Two controllers are no investment, and get None (null in year.json) where a figure does not apply:
+always-on is the reference (capex, upkeep, saving, NPV and CO2 avoided 0; no payback: None); a
+bound (``BOUNDS``: the oracle, and the oracle on what the cameras see) is not something one can
+install (no hardware: capex, opex, payback and NPV None; ``money_saved_per_year = S x p`` and the
+CO2 avoided are the most any controller could save, before upkeep).
 """
 
 from __future__ import annotations
@@ -35,23 +41,30 @@ DEVICES = {
     "controller_node": ("controller_node_per_pole", "controller_maintenance_per_pole_year"),
 }
 #: The devices each controller needs per pole (by controller name); a camera controller not named
-#: here needs ``CAMERA_HARDWARE``. The oracle is costed as the best camera system could be.
+#: here needs ``CAMERA_HARDWARE``.
 HARDWARE = {
     "always_on": (),
     "schedule": ("controller_node",),
     "pir": ("pir_sensor", "controller_node"),
 }
 CAMERA_HARDWARE = ("camera_node", "controller_node")
+#: The reference every figure is measured against: no investment, so no payback.
+REFERENCE = "always_on"
+#: Bounds, not products (they know where road users are): no hardware to buy or keep, so no capex,
+#: opex, payback or NPV.
+BOUNDS = ("oracle", "oracle_seen")
 
 
 def hardware_of(name: str) -> tuple[str, ...]:
-    """The devices (``DEVICES`` keys) per pole that controller ``name`` needs."""
+    """The devices (``DEVICES`` keys) per pole that controller ``name`` needs (none for a bound)."""
     from citysim.control.registry import CONTROLLERS
 
     if name in HARDWARE:
         return HARDWARE[name]
+    if name in BOUNDS:
+        return ()
     cls = CONTROLLERS.get(name)
-    return CAMERA_HARDWARE if cls is None or cls.uses_camera or name == "oracle" else ("controller_node",)
+    return CAMERA_HARDWARE if cls is None or cls.uses_camera else ("controller_node",)
 
 
 @dataclass(frozen=True)
@@ -107,7 +120,8 @@ def payback_years(capex: float, saved_kwh: float, opex_per_year: float, prices: 
 def money_figures(kwh_per_year: dict[str, float], names: dict[str, str], poles: int, costs: CostsSpec,
                   prices: Prices) -> dict[str, dict]:  # fmt: skip
     """Per controller label: capex, opex_per_year, money_saved_per_year, payback_years, npv and
-    co2_avoided_kg_over_lifetime against always-on.
+    co2_avoided_kg_over_lifetime against always-on; None where a figure does not apply (always-on's
+    payback; a bound's capex, opex, payback and NPV: the module docstring).
 
     Parameters
     ----------
@@ -120,16 +134,19 @@ def money_figures(kwh_per_year: dict[str, float], names: dict[str, str], poles: 
     reference_kwh = kwh_per_year["always_on"]
     out = {}
     for label, kwh in kwh_per_year.items():
-        capex, opex = capex_opex(costs, hardware_of(names.get(label, label)), poles)
+        name = names.get(label, label)
+        capex, opex = capex_opex(costs, hardware_of(name), poles)
         saved = reference_kwh - kwh
         out[label] = {
             "capex": capex,
             "opex_per_year": opex,
             "money_saved_per_year": net_saving(saved, opex, prices, 1),
-            "payback_years": payback_years(capex, saved, opex, prices),
+            "payback_years": None if name == REFERENCE else payback_years(capex, saved, opex, prices),
             "npv": npv(capex, saved, opex, prices),
             "co2_avoided_kg_over_lifetime": saved * prices.kg_co2_per_kwh * prices.lifetime_years,
         }
+        if name in BOUNDS:  # nothing to buy: only what it saves applies
+            out[label].update(capex=None, opex_per_year=None, payback_years=None, npv=None)
     return out
 
 

@@ -10,7 +10,7 @@ from collections.abc import Mapping
 
 from citysim.report.common import fmt_pct
 from citysim.report.year_section import sampled_entries
-from citysim.sim.compare import REFERENCE_CONTROLLERS
+from citysim.sim.compare import ORACLE_SAVES_NOTHING_BELOW, REFERENCE_CONTROLLERS
 from experiments.results.sources import NIGHT, YEAR, Source
 
 #: The command that writes this page and its figures.
@@ -36,7 +36,9 @@ def _interval(name: str, figures: Mapping) -> str:
 
 
 def _share_of_oracle(saving: float | None, oracle_saving: float | None) -> str:
-    if saving is None or not oracle_saving:
+    """``saving`` as a share of the oracle's; '-' where the oracle saves nothing to take a share of
+    (``citysim.sim.compare.ORACLE_SAVES_NOTHING_BELOW``)."""
+    if saving is None or oracle_saving is None or oracle_saving < ORACLE_SAVES_NOTHING_BELOW:
         return "-"
     return f"{100 * saving / oracle_saving:.0f} %"
 

@@ -37,3 +37,16 @@ def test_same_files_give_the_same_bytes(tmp_path):
     first = [p.read_bytes() for p in write_results(tmp_path / "a")]
     second = [p.read_bytes() for p in write_results(tmp_path / "b")]
     assert first == second
+
+
+def test_no_share_of_an_oracle_that_saves_nothing_on_the_page():
+    from experiments.results.pages import night_table
+
+    def row(kind: str, saving: float) -> dict:
+        return {"controller": kind, "savings_vs_always_on": saving, "lit_on_entry_rate": 1.0}
+
+    for oracle_saving in (-0.061, 0.004):  # at or below zero, and a few tenths of a percent
+        lines = night_table({"controllers": {"oracle": row("oracle", oracle_saving), "pir": row("pir", 0.171)}})
+        assert lines[-1].startswith("| pir | 17.1 % | - |")
+    lines = night_table({"controllers": {"oracle": row("oracle", 0.342), "pir": row("pir", 0.171)}})
+    assert lines[-1].startswith("| pir | 17.1 % | 50 % |")

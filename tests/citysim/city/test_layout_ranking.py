@@ -7,7 +7,7 @@ import math
 import pytest
 
 from citysim.city.layout import grid_shifts, offset_m, place
-from citysim.city.results import best_controller, ranking
+from citysim.city.results import best_controller, city_total, ranking
 
 
 def test_a_point_is_placed_along_and_left_of_a_bent_centreline():
@@ -48,3 +48,10 @@ def test_the_best_controller_lights_enough_and_pays_back_first():
     ranked = ranking([c, a, b])
     assert [(r["rank"], r["street"], r["controller"]) for r in ranked] == [(1, "b", "detector"), (2, "a", "detector"),
                                                                           (3, "c", None)]
+
+
+def test_a_city_total_of_a_figure_no_street_has_is_null_not_zero():
+    # the oracle's capex per street is null (a bound: nothing to buy), so the city's total is too
+    assert city_total([None, None]) is None
+    assert city_total([1200.0, None, 800.0]) == pytest.approx(2000.0)
+    assert city_total([0.0]) == 0.0  # always-on's capex: a real zero

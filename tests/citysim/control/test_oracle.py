@@ -7,7 +7,12 @@ import math
 import pytest
 
 from citysim.config.scenario import ControllerSpec, scenario_from_mapping
-from citysim.sim.compare import resolve_controllers, with_savings_vs_oracle
+from citysim.sim.compare import (
+    ORACLE_SAVES_NOTHING_BELOW,
+    oracle_bound,
+    resolve_controllers,
+    with_savings_vs_oracle,
+)
 from citysim.sim.loop import build_controller, run_controller
 from citysim.sim.night import build_night
 from tests.citysim.sim.test_loop import FPS, tiny_scenario
@@ -88,3 +93,19 @@ def test_savings_vs_oracle_is_the_share_of_the_bound():
     assert out["oracle"]["savings_vs_oracle"] == pytest.approx(1.0)
     assert list(out["always_on"]) == ["controller", "savings_vs_always_on", "savings_vs_oracle", "x"]
     assert with_savings_vs_oracle({"pir": results["pir"]})["pir"]["savings_vs_oracle"] is None
+
+
+@pytest.mark.parametrize("oracle_saving", [-0.061, 0.0, 0.009])
+def test_no_share_of_an_oracle_that_saves_nothing(oracle_saving):
+    # a 60 s run of a busy street: the oracle's lamps at full all along; 0.171 / -0.061 read -280 %
+    results = {
+        "always_on": {"controller": "always_on", "savings_vs_always_on": 0.0},
+        "oracle": {"controller": "oracle", "savings_vs_always_on": oracle_saving},
+        "pir": {"controller": "pir", "savings_vs_always_on": 0.171},
+    }
+    assert oracle_bound(results) is None
+    out = with_savings_vs_oracle(results)
+    assert all(figures["savings_vs_oracle"] is None for figures in out.values())
+    # just at the threshold the bound counts
+    results["oracle"]["savings_vs_always_on"] = ORACLE_SAVES_NOTHING_BELOW
+    assert with_savings_vs_oracle(results)["pir"]["savings_vs_oracle"] == pytest.approx(0.171 / ORACLE_SAVES_NOTHING_BELOW)

@@ -20,17 +20,36 @@ from citysim.sim.calibration import SHIPPED_DIR, model_path, sensor_model_for
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "scenarios"
 SHIPPED = sorted(SHIPPED_DIR.glob("*.json"))
-RECALIBRATE = ("calibrate it again: citysim calibrate scenarios/{name}.yaml --cache scenarios/sensor_models, "
-               "then git rm the old file")  # fmt: skip
+
+
+def recalibrate_hint(scenario_file: Path) -> str:
+    """What to do about a stale model of the scenario in ``scenario_file`` (a path under
+    scenarios/): the calibrate command naming that file, relative to the repository."""
+    return (f"calibrate it again: citysim calibrate {scenario_file.relative_to(SCENARIOS.parent).as_posix()} "
+            "--cache scenarios/sensor_models, then git rm the old file")
+
+
+def _scenario_file(path: Path) -> Path:
+    """A shipped model's scenario file: scenarios/NAME.yaml, else the one scenarios/*/NAME.yaml (an
+    imported street's, e.g. scenarios/osm/)."""
+    name = path.stem.rpartition("-")[0]
+    found = [SCENARIOS / f"{name}.yaml"] if (SCENARIOS / f"{name}.yaml").exists() else sorted(SCENARIOS.glob(f"*/{name}.yaml"))
+    assert len(found) == 1, f"{path.name}: no single scenario file named {name}.yaml under {SCENARIOS}: {found}"
+    return found[0]
 
 
 def _scenario_of(path: Path):
-    """(name, key, scenario) of a shipped model: its scenario file is scenarios/NAME.yaml, else the
-    one scenarios/*/NAME.yaml (an imported street's, e.g. scenarios/osm/)."""
-    name, _, key = path.stem.rpartition("-")
-    found = [SCENARIOS / f"{name}.yaml"] if (SCENARIOS / f"{name}.yaml").exists() else sorted(SCENARIOS.glob(f"*/{name}.yaml"))
-    assert len(found) == 1, f"{path.name}: no single scenario file named {name}.yaml under {SCENARIOS}: {found}"
-    return name, key, load_scenario(found[0])
+    """(scenario file, key, scenario) of a shipped model."""
+    scenario_file = _scenario_file(path)
+    return scenario_file, path.stem.rpartition("-")[2], load_scenario(scenario_file)
+
+
+def test_the_recalibrate_hint_names_the_real_scenario_file():
+    # geisslerweg's model is shipped and its scenario lives under scenarios/osm/, not scenarios/
+    model = next(p for p in SHIPPED if p.stem.startswith("geisslerweg-"))
+    hint = recalibrate_hint(_scenario_file(model))
+    assert "citysim calibrate scenarios/osm/geisslerweg.yaml " in hint
+    assert (SCENARIOS.parent / hint.split("citysim calibrate ")[1].split()[0]).is_file()
 
 
 def test_suburban_night_the_demo_scenario_ships_a_model():
@@ -39,10 +58,10 @@ def test_suburban_night_the_demo_scenario_ships_a_model():
 
 @pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
 def test_a_shipped_model_has_its_scenarios_current_key_and_loads(path):
-    name, key, scenario = _scenario_of(path)
+    scenario_file, _, scenario = _scenario_of(path)
     expected = model_path(scenario, SHIPPED_DIR, calibration.DEFAULT_DURATION_S, calibration.DEFAULT_RUNS)
-    assert expected.name == path.name, f"{path.name} is stale (the key is now {expected.stem}): " + RECALIBRATE.format(
-        name=name
+    assert expected.name == path.name, f"{path.name} is stale (the key is now {expected.stem}): " + recalibrate_hint(
+        scenario_file
     )
     model = SensorModel.load(path)
     assert model.key == path.stem

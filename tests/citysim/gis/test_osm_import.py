@@ -134,3 +134,11 @@ def test_a_branch_that_turns_back_is_not_joined_into_the_street(tmp_path):
 def test_the_notes_give_the_approaches_before_and_after_the_lamp_zones(street):
     # lamps at s 30, 70, 85, 140 on 180 m: zones from 30 - 40/2 = 10 m to 140 + 55/2 = 167.5 m
     assert "approaches: 10.0 m before the first lamp zone, 12.5 m after the last" in street.notes
+
+
+def test_a_scenario_name_spells_german_letters_out():
+    from citysim.gis.imported import slug
+
+    assert slug("Geißlerweg") == "geisslerweg"
+    assert slug("Düsseldorfer Straße") == "duesseldorfer_strasse"  # ü as ue, not u
+    assert slug("Rue de l'Église") == "rue_de_l_eglise"

@@ -54,6 +54,11 @@ def test_no_share_of_the_oracle_when_the_oracle_saves_nothing():
     assert "-279.9 %" not in rows["pir"] and "17.1 %" in rows["pir"]
     assert "vs oracle not given: the oracle saves -6.1 % against always-on" in text
     assert "vs oracle above 100 %" not in text
+    # a bound of a few tenths of a percent is no bound either: its summary.json share is None
+    small = comparison_table(run_summary(oracle=figures("oracle", 0.004, 1.0, None),
+                                         pir=figures("pir", 0.171, 0.458, None)))  # fmt: skip
+    assert "the oracle saves 0.4 % against always-on on this run, less than 1 %" in small
+    assert "its lamps were at full nearly the whole run" in small
 
 
 def test_the_best_controller_is_installable_and_lights_the_stated_share():
