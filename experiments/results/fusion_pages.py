@@ -168,5 +168,5 @@ def fusion_summary_section(results_dir: Path) -> str:
         lines.append(f"- **{scenario}** ({_runs(len(runs))} of 1,200 s at full fidelity, "
                      f"{pooled(runs, 'oracle')['entries']} zone entries; the oracle saves {fmt_pct(oracle)} "
                      f"of always-on's energy on average): {cells}.")
-    return ("Measured (every run, fast mode beside full fidelity and the whole nights: "
+    return (f"Measured by `{COMMAND}` (every run, fast mode beside full fidelity and the whole nights: "
             "[design: fusion](../design/fusion.md#measurements)):\n\n" + "\n".join(lines) + "\n")

@@ -8,6 +8,7 @@ to date, run that command and copy the file it names over the committed one; the
 from __future__ import annotations
 
 import json
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,6 +40,14 @@ class Source:
     def load(self, results_dir: Path = RESULTS_DIR) -> dict:
         """The file's contents; ``results_dir`` is the folder holding it."""
         return json.loads((results_dir / self.file).read_text())
+
+    def copy_to(self, folder: Path, results_dir: Path = RESULTS_DIR) -> None:
+        """Copy the file (or folder of run files) from ``results_dir`` into ``folder``."""
+        source = results_dir / self.file
+        if source.is_dir():
+            shutil.copytree(source, folder / self.file)
+        else:
+            shutil.copy(source, folder / self.file)
 
 
 YEAR = Source(
@@ -95,5 +104,14 @@ CITY_TIMING = Source(
     produced="experiments/results/city_duesseldorf_wersten_timing.json",
     what="wall and CPU time and each worker's memory of the city's year with 1 and with 2 workers",
 )
+# The street tracker's measurements (docs/design/fusion.md, docs/guide/fusion.md): a folder of run
+# files, one per scenario, start hour, seed and fidelity (``experiments.results.fusion_pages`` reads them).
+FUSION = Source(
+    file="fusion",
+    command="python -m experiments.fusion_runs",
+    produced="experiments/results/fusion/*.json",
+    what="suburban_night_two_way and suburban_night, seeds 1-3, 1,200 s from 22:00 and 02:00, full fidelity and "
+         "fast mode, and a whole fast night of each",
+)
 #: The sources of the generated sections in the guide and design pages.
-PAGE_SOURCES = (OSM_NIGHT, OSM_FULL, CITY, CITY_90, CITY_TIMING)
+PAGE_SOURCES = (OSM_NIGHT, OSM_FULL, CITY, CITY_90, CITY_TIMING, FUSION)

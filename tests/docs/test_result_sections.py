@@ -26,7 +26,7 @@ def _copies(tmp_path):
     results, docs = tmp_path / "results", tmp_path / "docs"
     results.mkdir()
     for source in PAGE_SOURCES:
-        shutil.copy(RESULTS_DIR / source.file, results / source.file)
+        source.copy_to(results)
     for section in SECTIONS:
         (docs / section.page).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy(DOCS_DIR / section.page, docs / section.page)

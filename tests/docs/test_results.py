@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import json
-import shutil
 
 from experiments.results.__main__ import DOCS_RESULTS, stale_files, write_results
-from experiments.results.sources import PAGE_SOURCES, RESULTS_DIR, SOURCES
+from experiments.results.sources import PAGE_SOURCES, SOURCES
 
 
 def test_committed_results_are_current():
@@ -18,7 +17,7 @@ def test_a_changed_result_file_makes_the_page_stale(tmp_path):
     results = tmp_path / "results"
     results.mkdir()
     for source in SOURCES + PAGE_SOURCES:
-        shutil.copy(RESULTS_DIR / source.file, results / source.file)
+        source.copy_to(results)
     year_file = results / SOURCES[0].file
     year = json.loads(year_file.read_text())
     year["controllers"]["oracle"]["savings_vs_always_on"] += 0.01

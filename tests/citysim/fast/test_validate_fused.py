@@ -19,7 +19,7 @@ def test_validate_compares_detector_fused_and_oracle_seen_full_against_fast(caps
     assert code == 0
     rows = {line.split()[0]: line for line in out.splitlines() if line.split()[:1] in (["oracle_seen"], ["detector_fused"])}
     assert set(rows) == {"oracle_seen", "detector_fused"}
-    for name, line in rows.items():
+    for line in rows.values():
         # savings full / fast: both measured, each a percentage, and a verdict on every figure
         assert re.search(r"-?\d+\.\d% / -?\d+\.\d% (PASS|MISS)", line), line
         assert len(re.findall(r"\b(PASS|MISS)\b", line)) == 4, line
