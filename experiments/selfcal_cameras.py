@@ -64,14 +64,17 @@ def render(height_m: float, tilt_deg: float, out_dir: Path, lamp: int = LAMP, cl
 
 
 def truth_tracks(truth_csv: Path, min_sightings: int = 8) -> list[np.ndarray]:
-    """The pedestrians' truth boxes clear of the frame's edge as image tracks (frame, centre column,
-    top edge row, bottom edge row, width; pixel-centre convention, as ``detector.selfcal.walkers``)."""
+    """The pedestrians' truth boxes clear of the frame's edge and upright as ``detector.selfcal.walkers``
+    keeps them, as image tracks (frame, centre column, top edge row, bottom edge row, width;
+    pixel-centre convention, as ``detector.selfcal.walkers``)."""
+    from detector.selfcal.walkers import MIN_ASPECT, MIN_HEIGHT_PX
+
     by_id: dict[str, list] = {}
     with open(truth_csv) as fh:
         for r in csv.DictReader(fh):
-            if r["cls"] != "pedestrian" or r["touches_border"] == "1":
-                continue
             x, y, w, h = (int(float(r[k])) for k in "xywh")
+            if r["cls"] != "pedestrian" or r["touches_border"] == "1" or h < MIN_HEIGHT_PX or h < MIN_ASPECT * w:
+                continue
             by_id.setdefault(r["object_id"], []).append((int(r["frame"]), x + (w - 1) / 2, y - 0.5, y + h - 0.5, w))
     return [np.array(s) for s in by_id.values() if len(s) >= min_sightings]
 
