@@ -26,8 +26,10 @@ MIN_HEIGHT_PX = 12
 MIN_AREA_FRACTION = 0.0002
 #: frames a track may go unseen and still be continued
 MAX_GAP_FRAMES = 8
-#: smallest overlap (intersection over union) of a region with a track's last box to continue it
-MIN_IOU = 0.25
+#: smallest share of a region's box inside a track's grown last box for it to continue the track
+MIN_INSIDE = 0.6
+#: a region continuing a track is at most this many times taller or shorter than the track's last box
+MAX_HEIGHT_RATIO = 1.5
 _PARAMS = SegmenterParams(min_area_fraction=MIN_AREA_FRACTION)
 #: how far the segmenter's dilation grows a region on each side, px
 GROWN_PX = _PARAMS.dilate_iterations * (_PARAMS.open_kernel_px // 2)
@@ -55,11 +57,19 @@ def _iou(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
     return inter / (a[2] * a[3] + b[2] * b[3] - inter) if inter else 0.0
 
 
-def _near(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
-    """How well box ``a`` continues box ``b``: their overlap (intersection over union) with ``b``
-    grown by a quarter of its height on every side (a walker moves between sightings)."""
-    m = b[3] // 4
-    return _iou(a, (b[0] - m, b[1] - m, b[2] + 2 * m, b[3] + 2 * m))
+def _continues(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> float:
+    """How well box ``a`` continues box ``b`` (a track's last box), 0 when it cannot: ``a`` lies
+    mostly (``MIN_INSIDE``) within ``b`` grown by a quarter of its height on every side (a walker
+    moves between sightings) and its height is within ``MAX_HEIGHT_RATIO`` of ``b``'s (a leg or
+    a head lost for a frame, no more); else their overlap (intersection over union), at least
+    a small positive number, so the nearest of several candidates wins."""
+    m = max(2, b[3] // 4)
+    grown = (b[0] - m, b[1] - m, b[2] + 2 * m, b[3] + 2 * m)
+    ix = max(0, min(a[0] + a[2], grown[0] + grown[2]) - max(a[0], grown[0]))
+    iy = max(0, min(a[1] + a[3], grown[1] + grown[3]) - max(a[1], grown[1]))
+    if ix * iy < MIN_INSIDE * a[2] * a[3] or not 1 / MAX_HEIGHT_RATIO <= a[3] / b[3] <= MAX_HEIGHT_RATIO:
+        return 0.0
+    return max(_iou(a, b), 1e-6)
 
 
 def join_stacked(boxes: list, edges: list) -> list[tuple[tuple[int, int, int, int], bool]]:
@@ -104,16 +114,19 @@ def upright_tracks(frames: Iterable[np.ndarray], fps: float, min_sightings: int 
             continue
         boxes = join_stacked(regions.boxes_px.tolist(), regions.touches_border.tolist())
         candidates = [box for box, edge in boxes if not edge and box[3] >= MIN_HEIGHT_PX and box[3] >= MIN_ASPECT * box[2]]
-        still = []
-        for track in active:
-            if k - track.last_frame > MAX_GAP_FRAMES:
-                done.append(track)
-                continue
-            best = max(candidates, key=lambda box: _near(box, track.last_box), default=None)
-            if best is not None and _near(best, track.last_box) >= MIN_IOU:
-                track.add(k, best)
-                candidates.remove(best)
-            still.append(track)
+        live = [t for t in active if k - t.last_frame <= MAX_GAP_FRAMES]
+        done.extend(t for t in active if k - t.last_frame > MAX_GAP_FRAMES)
+        # the best-overlapping (track, region) pairs first: a track and a region are paired once
+        pairs = sorted(((_continues(box, t.last_box), i, j) for i, t in enumerate(live)
+                        for j, box in enumerate(candidates)), reverse=True)
+        used_t, used_b = set(), set()
+        for score, i, j in pairs:
+            if score > 0 and i not in used_t and j not in used_b:
+                live[i].add(k, candidates[j])
+                used_t.add(i)
+                used_b.add(j)
+        still = live
+        candidates = [box for j, box in enumerate(candidates) if j not in used_b]
         for box in candidates:
             track = ImageTrack(box, k)
             track.add(k, box)
