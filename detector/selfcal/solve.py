@@ -39,6 +39,12 @@ BOOTSTRAP_RESAMPLES = 40
 #: axis (half the feet's spread in a step plus half a foot) and the crown's far edge about 0.1 m
 #: behind it (half a head); measured on citysim's walkers at 8-12 m: 0.23 m and 0.10 m
 BOX_DEPTH_M = 0.3
+#: a sighting whose box is shorter than this is left out, px: the segmenter loses the faint top
+#: and bottom pixel rows of a small walker (measured against citysim's truth boxes: 1-2 px of
+#: 12-25 px tall boxes, none of 40 px and more), which makes far walkers look shorter
+MIN_BOX_PX = 20.0
+#: a track needs this many sightings of at least ``MIN_BOX_PX`` to count
+MIN_SIGHTINGS = 8
 #: a track whose feet move fewer rows than this constrains no tilt, px
 MIN_FOOT_RANGE_PX = 10.0
 
@@ -160,8 +166,9 @@ def calibrate(tracks: list[np.ndarray], width_px: int, height_px: int, fx_px: fl
     Raises CalibrationError with fewer than ``min_walkers`` walkers left after the checks.
     """
     cx, cy = width_px / 2.0, height_px / 2.0
+    tall = [t[t[:, 3] - t[:, 2] >= MIN_BOX_PX] for t in tracks]
     # a walker must change his distance: a track whose foot row hardly moves constrains no tilt
-    kept = [t for t in tracks if np.ptp(t[:, 3]) >= MIN_FOOT_RANGE_PX]
+    kept = [t for t in tall if len(t) >= MIN_SIGHTINGS and np.ptp(t[:, 3]) >= MIN_FOOT_RANGE_PX]
     if len(kept) < min_walkers:
         raise CalibrationError(f"only {len(kept)} walkers moved nearer or farther in view (at least {min_walkers} "
                                "needed): a longer clip, with people walking towards or away from the camera")

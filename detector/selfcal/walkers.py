@@ -26,6 +26,8 @@ MIN_HEIGHT_PX = 12
 MIN_AREA_FRACTION = 0.0002
 #: frames a track may go unseen and still be continued
 MAX_GAP_FRAMES = 8
+#: a track starting at most this long after another ended, where it ended, continues it, s
+LINK_GAP_S = 1.0
 #: smallest share of a region's box inside a track's grown last box for it to continue the track
 MIN_INSIDE = 0.6
 #: a region continuing a track is at most this many times taller or shorter than the track's last box
@@ -97,6 +99,30 @@ def join_stacked(boxes: list, edges: list) -> list[tuple[tuple[int, int, int, in
     return items
 
 
+def link_fragments(tracks: list[np.ndarray], max_gap_frames: int) -> list[np.ndarray]:
+    """Join tracks that are one walker lost for a while (hidden behind another, merged with him):
+    a track starting at most ``max_gap_frames`` after another ended, whose first sighting's foot
+    row and centre column are within half the other's last height of its last ones and whose
+    height is within ``MAX_HEIGHT_RATIO`` of it, continues it (the one that ended last, where several could).
+    ``tracks``: (N, 5) sighting arrays as ``upright_tracks`` returns them."""
+    out: list[np.ndarray] = []
+    for t in sorted(tracks, key=lambda t: t[0, 0]):
+        f, col, top, bot, _ = t[0]
+        best = None
+        for i, a in enumerate(out):
+            lf, lcol, ltop, lbot, _ = a[-1]
+            reach = (lbot - ltop) / 2
+            if (0 < f - lf <= max_gap_frames and abs(col - lcol) <= reach and abs(bot - lbot) <= reach
+                    and 1 / MAX_HEIGHT_RATIO <= (bot - top) / (lbot - ltop) <= MAX_HEIGHT_RATIO):
+                if best is None or lf > out[best][-1, 0]:
+                    best = i
+        if best is None:
+            out.append(t)
+        else:
+            out[best] = np.vstack([out[best], t])
+    return out
+
+
 def upright_tracks(frames: Iterable[np.ndarray], fps: float, min_sightings: int = 8) -> list[np.ndarray]:
     """Follow the upright moving regions of ``frames`` (uint8 grayscale, one size) at ``fps``
     frames/s; returns each track of at least ``min_sightings`` sightings as an (N, 4) array
@@ -132,4 +158,5 @@ def upright_tracks(frames: Iterable[np.ndarray], fps: float, min_sightings: int 
             track.add(k, box)
             still.append(track)
         active = still
-    return [np.array(t.sightings) for t in (*done, *active) if len(t.sightings) >= min_sightings]
+    tracks = link_fragments([np.array(t.sightings) for t in (*done, *active)], int(round(LINK_GAP_S * fps)))
+    return [t for t in tracks if len(t) >= min_sightings]

@@ -9,21 +9,26 @@ import pytest
 import yaml
 
 from detector.camera import CameraModel
-from detector.selfcal.solve import PRIOR_HEIGHT_M, CalibrationError, calibrate
+from detector.selfcal.solve import BOX_DEPTH_M, PRIOR_HEIGHT_M, CalibrationError, calibrate
 
 REPO = Path(__file__).resolve().parents[2]
+#: how far the nearer toe is in front of a walker's axis, m (the rest of BOX_DEPTH_M: his crown's far edge behind it)
+TOE_AHEAD_M = 0.2
 LENS = dict(focal_mm=0.73, sensor_w_mm=0.7, sensor_h_mm=0.525, width_px=320, height_px=240)
 
 
 def synthetic_tracks(camera: CameraModel, heights_m, rng) -> list[np.ndarray]:
     """Walkers of the given heights walking straight towards the camera, each sighting's head and
-    foot rows projected exactly (``CameraModel.project``; camera at the origin looking along +x) and jittered by up to half a pixel."""
+    foot rows projected exactly (``CameraModel.project``; camera at the origin looking along +x) and
+    jittered by up to half a pixel: the foot row from the nearer toe, 0.2 m in front of the body's
+    axis, the head row from the crown's far edge, 0.1 m behind it (``solve.BOX_DEPTH_M`` apart)."""
     tracks = []
     for k, h in enumerate(heights_m):
         lateral = -3.0 + 6.0 * k / max(len(heights_m) - 1, 1)
         rows = []
         for f, forward in enumerate(np.linspace(16.0, 16.0 - 1.4 * 89 / 15, 90)):  # 1.4 m/s at 15 fps
-            feet, head = camera.project(np.array([[forward, lateral, 0.0], [forward, lateral, h]]))
+            feet, head = camera.project(np.array([[forward - TOE_AHEAD_M, lateral, 0.0],
+                                                  [forward + BOX_DEPTH_M - TOE_AHEAD_M, lateral, h]]))
             jitter = rng.uniform(-0.5, 0.5, 2)
             rows.append((f, feet[0], head[1] + jitter[0], feet[1] + jitter[1], 10.0))
         tracks.append(np.array(rows))
