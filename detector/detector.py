@@ -258,8 +258,8 @@ class Detector:
     def _keep_cut(self, regions: Regions, boxes: list, rows: list, edge: list) -> None:
         """Un-flag (in ``edge``) the edge-cut regions that continue a track or fit a class (``detector.edges``)."""
         live = [] if self.tracks is None else [t.box_px for t in self.tracks.tracks]
-        keep_cut_regions(regions, boxes, rows, edge, self._frame_shape, live,
-                         lambda r: self._classify(np.array(r))[1], self._class_names, self.target_threshold)
+        keep_cut_regions(regions, boxes, rows, edge, self._frame_shape, live, classify=lambda r: self._classify(
+            np.array(r))[1], class_names=self._class_names, threshold=self.target_threshold)
 
     def _nothing(self) -> list[Detection]:
         """A frame with no region to classify: the tracks age (or the box tracker sees nothing)."""

@@ -46,7 +46,7 @@ def visible_part_fits(cls: str, width_m: float, height_m: float, width_cut: bool
 
 
 def keep_cut_regions(regions: Regions, boxes: list, rows: list, edge: list, frame_shape_px: tuple[int, int],
-                     live_track_boxes: list, classify: Callable[[list], list[list[float]]],
+                     live_track_boxes: list, *, classify: Callable[[list], list[list[float]]],
                      class_names: Sequence[str], threshold: float) -> None:
     """Un-flag (set ``edge[i]`` False) the regions cut by the frame's edge that may be measured.
 

@@ -27,7 +27,7 @@ def kept(boxes, rows, live=(), p_target=0.9, cls="pedestrian", cut_by_crop=None)
     edge = [True] * len(boxes)
     proba = [1.0 - p_target if c == "noise" else (p_target if c == cls else 0.0) for c in CLASSES]
     keep_cut_regions(regions_of(boxes, cut_by_crop), boxes, rows, edge, SHAPE, list(live),
-                     lambda rs: [proba for _ in rs], CLASSES, 0.5)
+                     classify=lambda rs: [proba for _ in rs], class_names=CLASSES, threshold=0.5)
     return [not e for e in edge]
 
 
