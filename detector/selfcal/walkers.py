@@ -3,7 +3,8 @@
 No camera model is known yet, so nothing here is metric: the segmenter (``detector.segment``,
 whole frames) finds the moving regions, those clear of the frame's edge and at least
 ``MIN_ASPECT`` times as tall as wide (a person standing or walking, seen from a pole) are
-joined frame to frame by overlap, and each track is a list of sightings: the column of the
+joined frame to frame by overlap (``_continues``), tracks of one walker lost for up to
+``LINK_GAP_S`` are linked (``link_fragments``), and each track is a list of sightings: the column of the
 region's centre and the rows of its top and bottom edges (pixel-centre convention: the box
 rows y .. y+h-1 have edges at y - 0.5 and y + h - 0.5), each moved ``GROWN_PX`` inwards: the
 segmenter's joining dilation grows every region by that much on each side.
