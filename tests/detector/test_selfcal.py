@@ -125,3 +125,18 @@ def test_calibrate_refuses_a_lens_it_cannot_use_in_one_line(tmp_path, capsys, ar
     for needle in needles:
         assert needle in err, err
     assert not (tmp_path / "cam.yaml").exists()
+
+
+def test_fragments_of_one_walker_are_linked_and_others_not():
+    from detector.selfcal.walkers import link_fragments
+
+    def track(first_frame, n, col, foot_row):  # a 30 px tall walker standing still
+        return np.array([(first_frame + k, col, foot_row - 30.0, foot_row, 8.0) for k in range(n)])
+
+    a, b = track(0, 10, 100.0, 150.0), track(14, 10, 103.0, 152.0)  # lost for 3 frames, 3 px on
+    far, late = track(14, 10, 200.0, 150.0), track(40, 10, 100.0, 150.0)
+    linked = link_fragments([b, a, far, late], max_gap_frames=15)
+    assert sorted(len(t) for t in linked) == [10, 10, 20]
+    joined = next(t for t in linked if len(t) == 20)
+    assert list(joined[:, 0]) == [*range(10), *range(14, 24)]
+    assert len(link_fragments([a, b], max_gap_frames=2)) == 2  # a longer gap than allowed
