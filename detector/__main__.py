@@ -75,8 +75,8 @@ def detect_video(video: Path, camera_file: Path, out_dir: Path, model_path: Path
     detecting in it). ``full_frame``: segment whole frames, not only the band where a target
     within range can appear (``detector.roi``; for comparison, or a camera whose range covers
     the whole frame anyway). ``border_filter``: drop every region cut by the frame's edge, as
-    the paper does (the default); False: keep those cut by the left, right or top edge that
-    continue a track, measured from their visible part.
+    the paper does (the default); False: keep those that continue a track or, cut by the left,
+    right or top edge, fit a class on their own (``detector.edges``), measured from their visible part.
     """
     from detector.detector import Detector
 
@@ -251,9 +251,9 @@ def add_detect_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--full-frame", action="store_true",
                    help="segment whole frames, not only the band where a target within --max-distance-m can appear")
     p.add_argument("--keep-edge-regions", action="store_true",
-                   help="keep a region cut by the frame's left, right or top edge when it continues a track "
-                        "(measured from its visible part); default: drop every region cut by the edge, as the "
-                        "paper does")
+                   help="keep a region cut by the frame's edge, measured from its visible part, when it "
+                        "continues a track or (cut by the left, right or top edge) its visible part fits a class; "
+                        "default: drop every region cut by the edge, as the paper does")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 

@@ -4,8 +4,8 @@
 merged with their light spot (section 5.2), tracks (``detector.tracks``), one classifier
 evaluation, and each track's target decision; ``tracking=False`` is the paper's per-frame path.
 Regions cut by the frame's edge are dropped (the paper's border filter) unless
-``border_filter=False``, which measures a region cut by the left, right or top edge from its
-visible part when it continues a track.
+``border_filter=False`` (``detector.edges``): a cut region continuing a track, or cut by the
+left, right or top edge with a visible part that fits a class, is measured from its visible part.
 Boxes are OpenCV ``(x, y, w, h)`` pixels of the full, distorted frame; distances are forward
 ground distances, m (see ``detector.camera``).
 
@@ -25,7 +25,7 @@ import numpy as np
 from detector.camera import CameraModel
 from detector.confirm import Tracker
 from detector.divide import MIN_SPOT_BRIGHTENING_DN, DivisionParams, divide_rows
-from detector.edges import keep_side_cut_continuing_tracks
+from detector.edges import keep_cut_regions
 from detector.features import SCALAR_MAX_REGIONS, RegionGeometry
 from detector.ghosts import StillRegions
 from detector.roi import Crop, full_frame, range_crop
@@ -130,9 +130,9 @@ class Detector:
     tracks : detector.tracks.tracker.TrackSet, optional
         A configured ``TrackSet``; None builds the default one.
     border_filter : bool
-        Drop every region cut by the frame's edge, as the paper does (the default). False: a
-        region cut only by the left, right or top edge (its bottom, so its distance, in view) is
-        measured from its visible part and classified when it overlaps a live track's last box.
+        Drop every region cut by the frame's edge, as the paper does (the default). False: a cut
+        region is measured from its visible part and kept when it overlaps a live track's last box
+        or, cut by the left, right or top edge, its visible part fits a class (``detector.edges``).
 
     Notes
     -----
@@ -255,10 +255,11 @@ class Detector:
             return False
         return spot[0] - max(spot[1], body[0]) >= MIN_SPOT_BRIGHTENING_DN
 
-    def _keep_side_cut(self, regions: Regions, boxes: list, edge: list) -> None:
-        """Un-flag (in ``edge``) the side-cut regions that continue a track (``detector.edges``)."""
+    def _keep_cut(self, regions: Regions, boxes: list, rows: list, edge: list) -> None:
+        """Un-flag (in ``edge``) the edge-cut regions that continue a track or fit a class (``detector.edges``)."""
         live = [] if self.tracks is None else [t.box_px for t in self.tracks.tracks]
-        keep_side_cut_continuing_tracks(regions, boxes, edge, self._frame_shape[0], live)
+        keep_cut_regions(regions, boxes, rows, edge, self._frame_shape, live, classify=lambda r: self._classify(
+            np.array(r))[1], class_names=self._class_names, threshold=self.target_threshold)
 
     def _nothing(self) -> list[Detection]:
         """A frame with no region to classify: the tracks age (or the box tracker sees nothing)."""
@@ -342,7 +343,7 @@ class Detector:
         # it, when that object is clear of the edge (the light spot was the part that reached it)
         if any(edge):
             if not self.border_filter:
-                self._keep_side_cut(regions, boxes, edge)
+                self._keep_cut(regions, boxes, rows, edge)
             crop = self.crop
             left, top, right, bottom = crop.left_px, crop.top_px, crop.right_px, crop.bottom_px
             for i in divided:

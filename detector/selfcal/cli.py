@@ -90,7 +90,7 @@ def calibrate_main(argv: list[str]) -> int:
     print(f"height {cal.height_m:.2f} +- {cal.height_sd_m:.2f} m, tilt {cal.tilt_deg:.1f} +- {cal.tilt_sd_deg:.1f} deg "
           f"below the horizon (roll taken as 0), from {cal.walkers} walkers ({cal.sightings} sightings)")
     if cal.walkers < 15:
-        print(f"note: {cal.walkers} walkers is few; the height rests on their mean height: 15 or more give it "
-              "within about 10 %", file=sys.stderr)
+        print(f"note: {cal.walkers} walkers is few; the height rests on their mean height: the more walkers, "
+              "the nearer it comes (15 or more advised)", file=sys.stderr)
     print(f"camera written to {args.out}")
     return 0
