@@ -24,6 +24,7 @@ from __future__ import annotations
 import os
 import shutil
 import signal
+import sys
 import tempfile
 import threading
 from collections.abc import Iterator, Sequence
@@ -134,12 +135,43 @@ def _stopping_on(signals: Sequence[int]) -> Iterator[None]:
     _stopped_by.clear()
     for signum in mine:
         signal.signal(signum, _raise_exit)
+    hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_about_stops(hook)
     try:
-        yield
+        with errors_after_a_stop_are_the_stop():
+            yield
     finally:
+        sys.unraisablehook = hook
         for signum in mine:
             signal.signal(signum, defaults[signum])
         _stopped_by.clear()
+
+
+@contextmanager
+def errors_after_a_stop_are_the_stop() -> Iterator[None]:
+    """Within this block, an error raised after a stop signal arrived ends as that stop
+    (``Interrupted``, the error as its cause).
+
+    The signal's own exception can be lost inside a callback from C, and the library it broke then
+    fails in its own words (numba compiling when Ctrl-C came: "no compiled object yet"); the cause
+    is the stop the user asked for, so that is what ends the job."""
+    try:
+        yield
+    except Exception as exc:
+        if _stopped_by:
+            raise Interrupted(_stopped_by[0]) from exc
+        raise
+
+
+def _quiet_about_stops(hook):
+    """``sys.unraisablehook`` that drops the ``Interrupted`` a callback from C swallowed (it is
+    recorded in ``_stopped_by`` and raised again) and hands everything else to ``hook``."""
+
+    def quiet(unraisable) -> None:
+        if not isinstance(unraisable.exc_value, Interrupted):
+            hook(unraisable)
+
+    return quiet
 
 
 @contextmanager

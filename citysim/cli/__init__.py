@@ -18,7 +18,7 @@ from citysim.cli.common import controller_list, user_errors
 from citysim.cli.stops import FAULT_EXIT, interrupted_line, no_room_line, writer_lock
 from citysim.sim.workers import WorkerLost
 from detector.cliargs import USAGE_EXIT, Parser
-from detector.outdir import Interrupted, stop_on_signals
+from detector.outdir import Interrupted, errors_after_a_stop_are_the_stop, stop_on_signals
 
 #: The commands in the order `citysim --help` lists them.
 COMMANDS = (run, render, year, city, sweep, calibrate, detect, plot, import_)
@@ -43,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
     # Ctrl-C and SIGTERM end the job as an exception: workers stop, half-written output goes
     with stop_on_signals():
         try:
-            with writer_lock(args):
+            with writer_lock(args), errors_after_a_stop_are_the_stop():
                 return args.func(args)
         except Interrupted as stop:
             print(f"\n{interrupted_line(args, existed)}", file=sys.stderr)

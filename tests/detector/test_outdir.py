@@ -13,6 +13,7 @@ from detector.outdir import (
     raise_if_terminated,
     remove_orphan_stages,
     staged_output,
+    stop_on_signals,
 )
 
 
@@ -69,6 +70,19 @@ def test_a_sigterm_whose_exception_a_callback_swallowed_still_stops_the_job(tmp_
     assert stopped.value.code == TERMINATED_EXIT
     assert not out.exists() and not list(tmp_path.iterdir())
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
+def test_a_library_broken_by_a_swallowed_stop_ends_as_the_stop_and_quietly(tmp_path, capsys):
+    # Ctrl-C while numba compiles: the handler's exception is lost in a ctypes callback, and numba
+    # then fails in its own words; the user sees the stop (130), not numba's traceback
+    with pytest.raises(SystemExit) as stopped, stop_on_signals():
+        _SignalsItselfWhenFreed()
+        raise RuntimeError("no compiled object yet")
+    assert stopped.value.code == TERMINATED_EXIT
+    assert isinstance(stopped.value.__cause__, RuntimeError)
+    assert "Interrupted" not in capsys.readouterr().err  # no "Exception ignored ..." report
+    with pytest.raises(RuntimeError), stop_on_signals():  # without a stop, an error stays an error
+        raise RuntimeError("a real fault")
 
 
 def test_raise_if_terminated_is_quiet_without_a_signal():
