@@ -19,17 +19,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import tempfile
 import time
 from pathlib import Path
 
+from citysim.city.runner import write_atomic
 from citysim.config.scenario import Scenario, load_scenario, override
 from citysim.sim.compare import run_comparison
 from experiments.bench.night import WHOLE_NIGHT_S, cpu_s, night_hour
+from experiments.results.sources import FUSION, RESULTS_DIR
 
 REPO = Path(__file__).resolve().parents[1]
-OUT_DIR = REPO / "experiments" / "results" / "fusion"
+OUT_DIR = RESULTS_DIR / FUSION.file
 SCENARIOS = ("suburban_night_two_way", "suburban_night")
 CONTROLLERS = ("always_on", "oracle", "oracle_seen", "pir", "detector_located", "detector_fused")
 SEEDS = (1, 2, 3)
@@ -42,9 +42,14 @@ KEPT_KEYS = ("energy_kwh", "savings_vs_always_on", "savings_vs_oracle", "gap_uns
              "unlit_crossings", "false_on_time_s", "on_time_s", "per_class")  # fmt: skip
 
 
+def start_clock(hour: int) -> str:
+    """The clock time hour ``hour`` of the night (from 22:00) starts at: ``22:00``, ``02:00``."""
+    return f"{(22 + hour) % 24:02d}:00"
+
+
 def run_name(scenario: str, hour: int | None, seed: int, fidelity: str) -> str:
     """``<scenario>-<HHMM>-seed<N>-<fidelity>``; ``night`` for the whole night."""
-    when = "night" if hour is None else f"{(22 + hour) % 24:02d}00"
+    when = "night" if hour is None else start_clock(hour).replace(":", "")
     return f"{scenario}-{when}-seed{seed}-{fidelity}"
 
 
@@ -63,9 +68,7 @@ def measure(base: Scenario, hour: int | None, seed: int, fidelity: str, workers:
     """One comparison; its figures with wall and CPU seconds."""
     scenario = night_of(base, hour, seed)
     c0, t0 = cpu_s(), time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="fusion-run-") as tmp:
-        summary = run_comparison(scenario, list(CONTROLLERS), out_dir=Path(tmp) / "run", workers=workers,
-                                 fidelity=fidelity, progress=False)  # fmt: skip
+    summary = run_comparison(scenario, list(CONTROLLERS), workers=workers, fidelity=fidelity, progress=False)
     return {"scenario": base.name, "start_hour": scenario.start_hour, "seed": seed, "fidelity": fidelity,
             "duration_s": scenario.duration_s, "wall_s": round(time.perf_counter() - t0, 1),
             "cpu_s": round(cpu_s() - c0, 1), "controllers": reduced(summary)}  # fmt: skip
@@ -78,14 +81,6 @@ def planned_runs(fidelities: list[str], scenarios: list[str]) -> list[tuple[str,
     if "fast" in fidelities:
         runs += [(name, None, SEEDS[0], "fast") for name in scenarios]
     return runs
-
-
-def write_json(path: Path, data: dict) -> None:
-    """Write ``data`` to ``path`` whole or not at all (a temporary file renamed into place)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
-    os.replace(tmp, path)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -102,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         base = load_scenario(REPO / "scenarios" / f"{name}.yaml")
         result = measure(base, hour, seed, fidelity, args.workers if fidelity == "full" else 1)
-        write_json(path, result)
+        write_atomic(path, json.dumps(result, indent=1, sort_keys=True) + "\n")
         fused = result["controllers"]["detector_fused"]
         print(f"[{i}/{len(runs)}] {path.name}: {result['cpu_s']:.0f} CPU-s; detector_fused "
               f"{fused['savings_vs_oracle']} of the oracle's savings at {fused['lit_on_entry_rate']} lit on entry",

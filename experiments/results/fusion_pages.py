@@ -15,17 +15,13 @@ from pathlib import Path
 
 from citysim.report.common import fmt_pct
 from citysim.sim.validation import compare_figures
+from experiments.fusion_runs import NIGHT_HOURS, SCENARIOS, SEEDS, run_name, start_clock
+from experiments.results.sources import FUSION
 
-#: The committed run files, under experiments/results/.
-FUSION_DIR = "fusion"
-SCENARIOS = ("suburban_night_two_way", "suburban_night")
-SEEDS = (1, 2, 3)
-HOURS = ("2200", "0200")
 SHOWN = ("oracle_seen", "pir", "detector_located", "detector_fused")
 #: The issue's targets for detector_fused, the six full-fidelity runs pooled.
 TARGET_SHARE = 0.90
 TARGET_LIT = 0.99
-COMMAND = "python -m experiments.fusion_runs"
 
 
 def _runs(n: int) -> str:
@@ -33,13 +29,14 @@ def _runs(n: int) -> str:
 
 
 def load_runs(results_dir: Path, scenario: str, fidelity: str) -> list[dict]:
-    """The scenario's 1,200 s runs in ``fidelity`` that exist, in table order (22:00 seeds 1-3, then 02:00)."""
+    """The scenario's 1,200 s runs in ``fidelity`` that exist, in table order (22:00 seeds 1-3, then 02:00),
+    each with its ``start`` clock time."""
     runs = []
-    for hour in HOURS:
+    for hour in NIGHT_HOURS:
         for seed in SEEDS:
-            path = results_dir / FUSION_DIR / f"{scenario}-{hour}-seed{seed}-{fidelity}.json"
+            path = results_dir / FUSION.file / f"{run_name(scenario, hour, seed, fidelity)}.json"
             if path.exists():
-                runs.append({"hour": hour, **json.loads(path.read_text())})
+                runs.append({"start": start_clock(hour), **json.loads(path.read_text())})
     return runs
 
 
@@ -74,23 +71,23 @@ def run_table(runs: Sequence[Mapping]) -> list[str]:
     for r in runs:
         c = r["controllers"]
         cells = " | ".join(_cell(c[label]) for label in SHOWN)
-        lines.append(f"| {r['hour'][:2]}:00 | {r['seed']} | {c['oracle']['zone_entries']} | "
+        lines.append(f"| {r['start']} | {r['seed']} | {c['oracle']['zone_entries']} | "
                      f"{fmt_pct(c['oracle']['savings_vs_always_on'])} | {cells} | {r['cpu_s'] / 60:.1f} |")
     return lines
 
 
 def pooled_lines(runs: Sequence[Mapping]) -> list[str]:
     """The runs pooled per controller, detector_fused against the targets, and the gap split."""
-    fused = pooled(runs, "detector_fused")
+    stats = {label: pooled(runs, label) for label in SHOWN}
+    fused = stats["detector_fused"]
     share_ok = fused["share"] is not None and fused["share"] >= TARGET_SHARE
     lit_ok = fused["lit"] is not None and fused["lit"] >= TARGET_LIT
-    rows = ", ".join(f"{label} {pooled(runs, label)['share']:.3f} at {fmt_pct(pooled(runs, label)['lit'])}"
-                     for label in SHOWN)  # fmt: skip
+    rows = ", ".join(f"{label} {p['share']:.3f} at {fmt_pct(p['lit'])}" for label, p in stats.items())
     split = "; ".join(
         f"{label} {100 * p['gap_unused']:+.1f} points of the oracle's savings and {100 * p['dark_unused']:+.1f} of "
-        f"entries" for label in ("detector_located", "detector_fused") for p in [pooled(runs, label)]
+        f"entries" for label in ("detector_located", "detector_fused") for p in [stats[label]]
         if p["gap_unused"] is not None and p["dark_unused"] is not None)  # fmt: skip
-    unseen = pooled(runs, "oracle_seen")
+    unseen = stats["oracle_seen"]
     return [
         f"Pooled over the {_runs(len(runs))} ({fused['entries']} zone entries): {rows} (share of the oracle's "
         f"savings at lit on entry).",
@@ -105,8 +102,8 @@ def pooled_lines(runs: Sequence[Mapping]) -> list[str]:
 
 def agreement_lines(full: Sequence[Mapping], fast: Sequence[Mapping]) -> list[str]:
     """Fast mode against full fidelity on the runs both have, per controller (``citysim validate``'s rule)."""
-    pairs = {(r["hour"], r["seed"]): r for r in fast}
-    matched = [(r, pairs[(r["hour"], r["seed"])]) for r in full if (r["hour"], r["seed"]) in pairs]
+    pairs = {(r["start"], r["seed"]): r for r in fast}
+    matched = [(r, pairs[(r["start"], r["seed"])]) for r in full if (r["start"], r["seed"]) in pairs]
     if not matched:
         return ["Fast mode against full fidelity: no run measured both ways."]
     figures = compare_figures([m[0] for m in matched], [m[1] for m in matched])
@@ -127,7 +124,7 @@ def agreement_lines(full: Sequence[Mapping], fast: Sequence[Mapping]) -> list[st
 
 def night_line(results_dir: Path, scenario: str) -> str:
     """The whole fast night (22:00-06:00) of the scenario, one sentence."""
-    path = results_dir / FUSION_DIR / f"{scenario}-night-seed1-fast.json"
+    path = results_dir / FUSION.file / f"{run_name(scenario, None, SEEDS[0], 'fast')}.json"
     if not path.exists():
         return "The whole fast night: not measured."
     run = json.loads(path.read_text())
@@ -140,7 +137,7 @@ def night_line(results_dir: Path, scenario: str) -> str:
 
 def fusion_section(results_dir: Path) -> str:
     """docs/design/fusion.md's generated measurement tables."""
-    out = [f"Made by `{COMMAND}` (one file per run in `experiments/results/{FUSION_DIR}/`). Each run: "
+    out = [f"Made by `{FUSION.command}` (one file per run in `experiments/results/{FUSION.file}/`). Each run: "
            "`always_on, oracle, oracle_seen, pir, detector_located, detector_fused` on the same traffic, 1,200 s "
            "from 22:00 (the night's first hour) or from 02:00 (its fifth, `experiments.bench.night.night_hour`). "
            "Cells: share of the oracle's savings / lit on entry.", ""]  # fmt: skip
@@ -168,5 +165,5 @@ def fusion_summary_section(results_dir: Path) -> str:
         lines.append(f"- **{scenario}** ({_runs(len(runs))} of 1,200 s at full fidelity, "
                      f"{pooled(runs, 'oracle')['entries']} zone entries; the oracle saves {fmt_pct(oracle)} "
                      f"of always-on's energy on average): {cells}.")
-    return (f"Measured by `{COMMAND}` (every run, fast mode beside full fidelity and the whole nights: "
+    return (f"Measured by `{FUSION.command}` (every run, fast mode beside full fidelity and the whole nights: "
             "[design: fusion](../design/fusion.md#measurements)):\n\n" + "\n".join(lines) + "\n")

@@ -7,7 +7,8 @@ import json
 import pytest
 
 from experiments.fusion_runs import CONTROLLERS, run_name
-from experiments.results.fusion_pages import FUSION_DIR, fusion_section, pooled
+from experiments.results.fusion_pages import fusion_section, pooled
+from experiments.results.sources import FUSION
 
 
 def controller(savings: float, oracle_savings: float, lit: float | None, entries: int) -> dict:
@@ -36,7 +37,7 @@ def test_pooled_share_is_saved_energy_over_saved_energy_and_lit_is_entry_weighte
 
 
 def test_section_reports_targets_met_and_missed_and_fast_against_full(tmp_path):
-    folder = tmp_path / FUSION_DIR
+    folder = tmp_path / FUSION.file
     folder.mkdir()
     for hour in (0, 4):
         for seed in (1, 2, 3):
