@@ -117,14 +117,21 @@ def plot_topdown(
     if tracks:
         _draw_tracks(ax, fig, tracks)
 
-    ax.set_xlim(-5.0, street.length_m + 5.0)
-    ax.set_ylim(y_lo, y_hi)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x along the street (m)")
-    ax.set_ylabel("y across (m)")
     title = f"Street {street.length_m:.0f} m, {len(street.lamps)} lamps, {len(cameras)} cameras"
     if coverage is not None:
         title += f"; {100 * coverage.seen.mean():.0f} % of lanes and sidewalks seen (green), blind in red"
+    bounds_m = (-5.0, street.length_m + 5.0, y_lo, y_hi)
+    return _finish(fig, ax, path, bounds_m, ("x along the street (m)", "y across (m)"), title)
+
+
+def _finish(fig: Figure, ax, path: Path, bounds_m: tuple, axis_labels: tuple[str, str], title: str) -> Path:
+    """Frame the axes on ``bounds_m`` (x min, x max, y min, y max; m) at equal scale, label and title
+    them, and write the figure to ``path`` (PNG); returns the path."""
+    ax.set_xlim(bounds_m[0], bounds_m[1])
+    ax.set_ylim(bounds_m[2], bounds_m[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel(axis_labels[0])
+    ax.set_ylabel(axis_labels[1])
     ax.set_title(title)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -155,19 +162,10 @@ def _plot_curved(
     _draw_lamps(ax, street, 0.0, zone_bar=curved.zone_bar_xy(street))
     if tracks:
         _draw_tracks(ax, fig, tracks)
-    ax.set_xlim(bbox[0], bbox[1])
-    ax.set_ylim(bbox[2], bbox[3])
-    ax.set_aspect("equal")
-    ax.set_xlabel("x east (m)")
-    ax.set_ylabel("y north (m)")
     title = f"Street {street.length_m:.0f} m along its centreline, {len(street.lamps)} lamps, {len(cameras)} cameras"
     if coverage is not None:
         title += f"\n{100 * coverage.seen.mean():.0f} % of lanes and sidewalks seen (green), blind in red"
-    ax.set_title(title)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, format="png")
-    return path
+    return _finish(fig, ax, path, tuple(bbox), ("x east (m)", "y north (m)"), title)
 
 
 def plot_coverage_map(street: Street, path: str | Path) -> Path:

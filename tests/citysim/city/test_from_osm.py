@@ -45,17 +45,24 @@ def test_names_stay_unique_also_where_case_is_ignored():
     assert len({n.casefold() for n in names}) == 4
 
 
-def test_an_osm_city_imports_the_selected_ways_as_scenario_files(tmp_path):
+def tiny_osm_city(tmp_path, street_name: str):
+    """A city file over a hand-written extract: one residential street named ``street_name`` with five
+    lamps along it, and a footway without lamps."""
     lamps = "\n  ".join(
         f'<node id="{10 + i}" lat="51.2000720" lon="{6.8002 + i * 0.0006:.7f}"><tag k="highway" v="street_lamp"/></node>'
         for i in range(5)
     )
-    (tmp_path / "tiny.osm").write_text(TINY_OSM.format(lamps=lamps, name="Elm Street"))
+    (tmp_path / "tiny.osm").write_text(TINY_OSM.format(lamps=lamps, name=street_name))
     city_file = tmp_path / "city.yaml"
     city_file.write_text(yaml.safe_dump({
         "osm": {"file": "tiny.osm", "highway": ["residential"], "min_lamps": 4},
         "site": {"latitude_deg": 51.2, "longitude_deg": 6.8, "timezone": "Europe/Berlin"},
     }))  # fmt: skip
+    return city_file
+
+
+def test_an_osm_city_imports_the_selected_ways_as_scenario_files(tmp_path):
+    city_file = tiny_osm_city(tmp_path, "Elm Street")
     out = tmp_path / "out"
     jobs = city_jobs(load_city(city_file), city_file, out, CityOptions(controllers=("pir",)))
     assert len(jobs) == 1  # the footway has no lamps
@@ -64,16 +71,7 @@ def test_an_osm_city_imports_the_selected_ways_as_scenario_files(tmp_path):
 
 
 def test_an_osm_street_with_a_sharp_s_is_written_under_its_spelled_name(tmp_path):
-    lamps = "\n  ".join(
-        f'<node id="{10 + i}" lat="51.2000720" lon="{6.8002 + i * 0.0006:.7f}"><tag k="highway" v="street_lamp"/></node>'
-        for i in range(5)
-    )
-    (tmp_path / "tiny.osm").write_text(TINY_OSM.format(lamps=lamps, name="Geißlerweg"))
-    city_file = tmp_path / "city.yaml"
-    city_file.write_text(yaml.safe_dump({
-        "osm": {"file": "tiny.osm", "highway": ["residential"], "min_lamps": 4},
-        "site": {"latitude_deg": 51.2, "longitude_deg": 6.8, "timezone": "Europe/Berlin"},
-    }))  # fmt: skip
+    city_file = tiny_osm_city(tmp_path, "Geißlerweg")
     out = tmp_path / "out"
     (out / "osm_streets").mkdir(parents=True)
     (out / "osm_streets" / "Gei_lerweg.yaml").write_text("an earlier import's copy\n")
